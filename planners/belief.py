@@ -1,0 +1,273 @@
+"""Weighted particle beliefs and their Bayes updates.
+
+A :class:`ParticleBelief` is three parallel arrays: the states (a Python list, since a
+state may be any object), their normalised weights ``(N,)`` and the index of the
+*initial* particle each one descends from ``(N,)``. The origin index survives
+propagation and resampling, so any belief met later can be read as a weight vector
+over the initial particles: STRUG's TRU is computed from exactly that.
+
+Two updates (:func:`update_belief` picks by ``pomdp.discrete_observations``):
+
+* **Discrete observations, exact match** (POMCP's rejection update): draw particles
+  by weight, propagate each through G(s, a), keep those whose simulated observation
+  equals the real one, until ``n`` are kept or ``max_tries_per_particle * n`` draws
+  were spent. *Fallback* when fewer than ``min_match_fraction * n`` matched: weight
+  every propagated particle by ``exp(obs_loglik)`` instead (exact for models whose
+  observation depends on ``(s', a)`` only). Zero total likelihood falls through to
+  reinvigoration, below.
+* **Continuous observations, likelihood weighting**: propagate every particle once,
+  multiply its weight by ``Z(o | s', a)`` (computed in log space, shifted by the max
+  so that tiny likelihoods do not underflow), normalise, and resample
+  (systematic) when the effective sample size falls below ``resample_ess * N``.
+
+*Reinvigoration* when every weight vanishes (the observation is impossible under
+every particle): the domain's ``reinvigorate(o, a, n, rng)`` proposes states
+consistent with ``o``; they get equal weights and origin ``-1`` (no known ancestor).
+A domain that cannot propose any gets a :class:`BeliefError` naming the observation.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Hashable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from planners.errors import BeliefError, check_positive_float, check_positive_int
+
+#: Origin index of a particle that has no initial ancestor (created by reinvigoration).
+NO_ORIGIN = -1
+
+
+@dataclass(frozen=True)
+class ParticleBelief:
+    """A weighted particle set.
+
+    Attributes:
+        states: the particles, length N (any state objects).
+        weights: normalised weights, shape ``(N,)``, non-negative, summing to 1.
+        origin: index of the initial particle each particle descends from, shape ``(N,)``
+            (``-1`` for reinvigorated particles).
+    """
+
+    states: list[Any]
+    weights: np.ndarray
+    origin: np.ndarray
+
+    def __post_init__(self) -> None:
+        n = len(self.states)
+        if n == 0:
+            raise BeliefError("a belief needs at least one particle, got 0")
+        w = np.asarray(self.weights, dtype=float)
+        if w.shape != (n,) or np.asarray(self.origin).shape != (n,):
+            raise BeliefError(
+                f"weights {w.shape} and origin {np.asarray(self.origin).shape} must both "
+                f"have shape ({n},) to match the {n} states"
+            )
+        if not np.all(np.isfinite(w)) or np.any(w < 0):
+            raise BeliefError("particle weights must be finite and >= 0")
+        total = w.sum()
+        if total <= 0:
+            raise BeliefError(f"all {n} particle weights are zero; a belief needs positive mass")
+        object.__setattr__(self, "weights", w / total)
+        object.__setattr__(self, "origin", np.asarray(self.origin, dtype=np.int64))
+
+    @classmethod
+    def from_states(cls, states: Sequence[Any], weights: Sequence[float] | None = None) -> ParticleBelief:
+        """A belief over ``states`` (uniform unless ``weights`` given); particle i is origin i."""
+        n = len(states)
+        w = np.full(n, 1.0 / max(n, 1)) if weights is None else np.asarray(weights, float)
+        return cls(list(states), w, np.arange(n, dtype=np.int64))
+
+    def __len__(self) -> int:
+        return len(self.states)
+
+    def ess(self) -> float:
+        """Effective sample size 1 / sum(w^2), in [1, N]."""
+        return float(1.0 / np.dot(self.weights, self.weights))
+
+    def sample_indices(self, rng: np.random.Generator, n: int) -> np.ndarray:
+        """``n`` particle indices drawn i.i.d. by weight, shape ``(n,)``."""
+        cdf = np.cumsum(self.weights)
+        idx = np.searchsorted(cdf, rng.random(n) * cdf[-1], side="right")
+        return np.minimum(idx, len(self.states) - 1)
+
+    def sample(self, rng: np.random.Generator) -> Any:
+        """One state drawn by weight."""
+        return self.states[int(self.sample_indices(rng, 1)[0])]
+
+    def origin_weights(self, n_origins: int) -> np.ndarray:
+        """Belief mass on each initial particle, shape ``(n_origins,)``, summing to <= 1.
+
+        Mass of reinvigorated particles (origin -1) is not attributed to any origin.
+        """
+        keep = (self.origin >= 0) & (self.origin < n_origins)
+        return np.bincount(self.origin[keep], weights=self.weights[keep], minlength=n_origins)
+
+    def resampled(self, rng: np.random.Generator, n: int | None = None) -> ParticleBelief:
+        """Systematic resampling to ``n`` (default N) equally weighted particles."""
+        n = len(self.states) if n is None else n
+        cdf = np.cumsum(self.weights)
+        positions = (rng.random() + np.arange(n)) / n
+        idx = np.minimum(np.searchsorted(cdf, positions * cdf[-1], side="right"), len(cdf) - 1)
+        return ParticleBelief(
+            [self.states[i] for i in idx], np.full(n, 1.0 / n), self.origin[idx].copy()
+        )
+
+    def expectation(self, f: Any) -> float:
+        """E_b[f(s)] for a scalar function ``f`` of the state."""
+        return float(sum(w * f(s) for s, w in zip(self.states, self.weights, strict=True)))
+
+
+@dataclass(frozen=True)
+class UpdateInfo:
+    """What happened in one belief update.
+
+    Attributes:
+        method: ``"match"``, ``"likelihood"`` or ``"reinvigorated"``.
+        matched: particles whose simulated observation matched (exact-match update only).
+        draws: particles propagated.
+        ess: effective sample size of the result.
+    """
+
+    method: str
+    matched: int
+    draws: int
+    ess: float
+
+
+def update_belief(
+    pomdp: Any,
+    belief: ParticleBelief,
+    a: Hashable,
+    o: Any,
+    rng: np.random.Generator,
+    *,
+    n_particles: int | None = None,
+    resample_ess: float = 0.5,
+    max_tries_per_particle: int = 20,
+    min_match_fraction: float = 0.1,
+) -> tuple[ParticleBelief, UpdateInfo]:
+    """Bayes update of ``belief`` after action ``a`` and observation ``o``.
+
+    Args:
+        pomdp: the generative model (``step``, ``obs_loglik``, ``discrete_observations``).
+        belief: the prior particle belief.
+        a: the action taken.
+        o: the observation received (validated by ``pomdp.check_observation``).
+        rng: randomness for propagation and resampling.
+        n_particles: size of the posterior (default: the prior's size).
+        resample_ess: resample when ESS < ``resample_ess * N`` (continuous updates), in (0, 1].
+        max_tries_per_particle: exact-match budget, in draws per wanted particle.
+        min_match_fraction: below this fraction of matches, fall back to likelihood weighting.
+
+    Returns:
+        The posterior and an :class:`UpdateInfo`.
+
+    Raises:
+        ObservationError: ``o`` is malformed (NaN).
+        BeliefError: no particle explains ``o`` and the domain cannot reinvigorate.
+    """
+    pomdp.check_observation(o)
+    n = len(belief) if n_particles is None else check_positive_int("n_particles", n_particles)
+    check_positive_float("resample_ess", resample_ess, upper=1.0)
+    if pomdp.discrete_observations:
+        return _update_exact_match(
+            pomdp, belief, a, o, rng, n, max_tries_per_particle, min_match_fraction, resample_ess
+        )
+    return _update_likelihood(pomdp, belief, a, o, rng, n, resample_ess)
+
+
+def _update_exact_match(
+    pomdp: Any,
+    belief: ParticleBelief,
+    a: Hashable,
+    o: Any,
+    rng: np.random.Generator,
+    n: int,
+    max_tries_per_particle: int,
+    min_match_fraction: float,
+    resample_ess: float,
+) -> tuple[ParticleBelief, UpdateInfo]:
+    kept: list[Any] = []
+    kept_origin: list[int] = []
+    proposed: list[Any] = []
+    proposed_origin: list[int] = []
+    draws = 0
+    budget = max_tries_per_particle * n
+    step = pomdp.step
+    while len(kept) < n and draws < budget:
+        batch = belief.sample_indices(rng, min(budget - draws, 2 * (n - len(kept)) + 16))
+        for i in batch.tolist():
+            s_next, o_sim, _, _ = step(belief.states[i], a, rng)
+            draws += 1
+            if len(proposed) < n:
+                proposed.append(s_next)
+                proposed_origin.append(int(belief.origin[i]))
+            if o_sim == o:
+                kept.append(s_next)
+                kept_origin.append(int(belief.origin[i]))
+                if len(kept) == n:
+                    break
+    if len(kept) >= max(1, min_match_fraction * n):
+        post = ParticleBelief(kept, np.full(len(kept), 1.0 / len(kept)), np.asarray(kept_origin))
+        if len(kept) < n:
+            post = post.resampled(rng, n)
+        return post, UpdateInfo("match", len(kept), draws, post.ess())
+    # Fallback: too few exact matches; weight the propagated particles by Z(o | s', a).
+    logw = np.array([pomdp.obs_loglik(o, s, a) for s in proposed], dtype=float)
+    post = _weighted(pomdp, proposed, np.asarray(proposed_origin), logw, o, a, rng, n, resample_ess)
+    method = "likelihood" if post[1] == "likelihood" else "reinvigorated"
+    return post[0], UpdateInfo(method, len(kept), draws, post[0].ess())
+
+
+def _update_likelihood(
+    pomdp: Any,
+    belief: ParticleBelief,
+    a: Hashable,
+    o: Any,
+    rng: np.random.Generator,
+    n: int,
+    resample_ess: float,
+) -> tuple[ParticleBelief, UpdateInfo]:
+    src = belief if len(belief) == n else belief.resampled(rng, n)
+    step = pomdp.step
+    nxt = [step(s, a, rng)[0] for s in src.states]
+    loglik = np.array([pomdp.obs_loglik(o, s, a) for s in nxt], dtype=float)
+    logw = np.log(np.maximum(src.weights, 1e-300)) + loglik
+    post, method = _weighted(pomdp, nxt, src.origin, logw, o, a, rng, n, resample_ess)
+    return post, UpdateInfo(method, 0, len(nxt), post.ess())
+
+
+def _weighted(
+    pomdp: Any,
+    states: list[Any],
+    origin: np.ndarray,
+    logw: np.ndarray,
+    o: Any,
+    a: Hashable,
+    rng: np.random.Generator,
+    n: int,
+    resample_ess: float,
+) -> tuple[ParticleBelief, str]:
+    if np.any(np.isnan(logw)):
+        raise BeliefError(f"{pomdp.name}: obs_loglik returned NaN for observation {o!r}")
+    top = logw.max() if len(logw) else -np.inf
+    if not np.isfinite(top):
+        fresh = pomdp.reinvigorate(o, a, n, rng)
+        if not fresh:
+            raise BeliefError(
+                f"{pomdp.name}: observation {o!r} after action {a!r} has zero likelihood "
+                "under every particle and the domain cannot reinvigorate its belief"
+            )
+        return (
+            ParticleBelief(list(fresh), np.full(len(fresh), 1.0 / len(fresh)),
+                           np.full(len(fresh), NO_ORIGIN)),
+            "reinvigorated",
+        )
+    w = np.exp(logw - top)
+    post = ParticleBelief(states, w, origin)
+    if post.ess() < resample_ess * len(post) or len(post) != n:
+        post = post.resampled(rng, n)
+    return post, "likelihood"
