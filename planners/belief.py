@@ -74,7 +74,9 @@ class ParticleBelief:
         object.__setattr__(self, "origin", np.asarray(self.origin, dtype=np.int64))
 
     @classmethod
-    def from_states(cls, states: Sequence[Any], weights: Sequence[float] | None = None) -> ParticleBelief:
+    def from_states(
+        cls, states: Sequence[Any], weights: Sequence[float] | None = None
+    ) -> ParticleBelief:
         """A belief over ``states`` (uniform unless ``weights`` given); particle i is origin i."""
         n = len(states)
         w = np.full(n, 1.0 / max(n, 1)) if weights is None else np.asarray(weights, float)
@@ -262,8 +264,9 @@ def _weighted(
                 "under every particle and the domain cannot reinvigorate its belief"
             )
         return (
-            ParticleBelief(list(fresh), np.full(len(fresh), 1.0 / len(fresh)),
-                           np.full(len(fresh), NO_ORIGIN)),
+            ParticleBelief(
+                list(fresh), np.full(len(fresh), 1.0 / len(fresh)), np.full(len(fresh), NO_ORIGIN)
+            ),
             "reinvigorated",
         )
     w = np.exp(logw - top)

@@ -39,7 +39,9 @@ def check_positive_int(name: str, value: object, *, allow_zero: bool = False) ->
 
     Booleans and non-integral floats are rejected: ``sims=2.5`` is a typo, not a request.
     """
-    ok = isinstance(value, int | float) and not isinstance(value, bool) and float(value).is_integer()
+    ok = (
+        isinstance(value, int | float) and not isinstance(value, bool) and float(value).is_integer()
+    )
     low = 0 if allow_zero else 1
     if not ok or int(value) < low:  # type: ignore[arg-type]
         bound = ">= 0" if allow_zero else ">= 1"

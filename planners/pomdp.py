@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import math
 from abc import ABC, abstractmethod
-from collections.abc import Callable, Hashable, Sequence
+from collections.abc import Callable, Hashable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, NamedTuple
 
@@ -136,6 +136,8 @@ class ActionSpace:
         if isinstance(a, int):
             return self.schemas[a].name
         if isinstance(a, HybridAction):
+            if not a.params:
+                return self.schemas[a.schema].name
             p = ", ".join(f"{x:+.2f}" for x in a.params)
             return f"{self.schemas[a.schema].name}({p})"
         return repr(a)
@@ -181,9 +183,11 @@ class GenerativePOMDP(ABC):
         """``n_particles`` equally weighted draws from b0, each its own origin."""
         from planners.belief import ParticleBelief
 
-        return ParticleBelief.from_states([self.sample_initial_state(rng) for _ in range(n_particles)])
+        return ParticleBelief.from_states(
+            [self.sample_initial_state(rng) for _ in range(n_particles)]
+        )
 
-    def is_terminal(self, s: Any) -> bool:  # noqa: ARG002 - default: no absorbing states
+    def is_terminal(self, s: Any) -> bool:
         """True when ``s`` is absorbing (the search stops there)."""
         return False
 

@@ -111,9 +111,11 @@ class TigerClassic(Tiger):
         return Step(s2, o, r, False)
 
     def obs_loglik(self, o: Any, s_next: int, a: Hashable) -> float:
+        if o == HEAR_NOTHING:
+            return -math.inf  # TigerClassic never observes "nothing"
         if a == LISTEN:
             return self._log_acc if o == s_next else self._log_err
-        return math.log(0.5) if o in (HEAR_LEFT, HEAR_RIGHT) else -math.inf
+        return math.log(0.5)
 
 
 class ExtendedTiger(Tiger):

@@ -1,0 +1,55 @@
+"""Online POMDP solvers: each a frozen config dataclass that builds a planner.
+
+``SOLVERS`` maps the canonical solver names to their config classes;
+``make_solver(name, overrides)`` builds a validated config.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from planners.errors import UnknownNameError
+from planners.solvers.base import SearchInfo, SolverConfig, TreeSearchConfig
+from planners.solvers.pomcp import POMCPConfig, POMCPPlanner
+from planners.solvers.pomcpow import POMCPOWConfig, POMCPOWPlanner
+from planners.solvers.random_solver import RandomConfig, RandomPlanner
+
+#: Canonical solver name -> config class, in the row order of the paper's Table I.
+SOLVERS: dict[str, type[SolverConfig]] = {
+    "random": RandomConfig,
+    "pomcp": POMCPConfig,
+    "pomcpow": POMCPOWConfig,
+}
+
+#: One-line descriptions for ``strug list``.
+SOLVER_SUMMARIES: dict[str, str] = {
+    "random": "uniformly random actions (no search)",
+    "pomcp": "POMCP (Silver & Veness 2010); continuous domains discretised",
+    "pomcpow": "POMCPOW (Sunberg & Kochenderfer 2018): double progressive widening",
+}
+
+
+def make_solver(name: str, overrides: dict[str, Any] | None = None) -> SolverConfig:
+    """The config of solver ``name`` with ``overrides`` applied and validated."""
+    try:
+        cls = SOLVERS[name]
+    except KeyError:
+        raise UnknownNameError("solver", name, list(SOLVERS)) from None
+    config = cls()
+    return config.with_overrides(overrides) if overrides else config
+
+
+__all__ = [
+    "SOLVERS",
+    "SOLVER_SUMMARIES",
+    "POMCPConfig",
+    "POMCPOWConfig",
+    "POMCPOWPlanner",
+    "POMCPPlanner",
+    "RandomConfig",
+    "RandomPlanner",
+    "SearchInfo",
+    "SolverConfig",
+    "TreeSearchConfig",
+    "make_solver",
+]

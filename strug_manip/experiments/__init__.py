@@ -1,0 +1,1 @@
+"""Experiments: one episode (``episode``), Table I runs (``bench``), tables (``table``)."""

@@ -1,0 +1,52 @@
+"""The ``strug`` command line: list, run (text and JSON)."""
+
+from __future__ import annotations
+
+import json
+
+from planners.solvers import SOLVERS
+from strug_manip.cli import main
+from strug_manip.domains import DOMAINS
+
+
+def test_list_names_every_domain_and_solver(capsys) -> None:
+    assert main(["list"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    firsts = {line.split()[0] for line in lines if line.startswith("  ")}
+    assert set(DOMAINS) | set(SOLVERS) <= firsts
+
+
+def test_run_json_lines(capsys) -> None:
+    argv = [
+        "run",
+        "--domain",
+        "tigerclassic",
+        "--solver",
+        "pomcp",
+        "--seed",
+        "2",
+        "--sims",
+        "200",
+        "--set",
+        "depth=4",
+        "--set",
+        "c=50",
+        "--json",
+    ]
+    assert main(argv) == 0
+    rows = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    steps, final = rows[:-1], rows[-1]
+    assert len(steps) == 10  # TigerClassic never ends early
+    for i, row in enumerate(steps):
+        assert row["step"] == i
+        assert {"action", "observation", "reward", "sims", "plan_seconds"} <= set(row)
+        assert row["sims"] == 200
+    assert "return" in final
+    gamma = 0.95
+    assert abs(final["return"] - sum(r["reward"] * gamma**i for i, r in enumerate(steps))) < 1e-9
+
+
+def test_run_text_shows_steps_and_return(capsys) -> None:
+    assert main(["run", "--domain", "lightdark1d", "--solver", "pomcpow", "--sims", "100"]) == 0
+    out = capsys.readouterr().out
+    assert "step 0:" in out and "discounted return:" in out and "Q/N at root" in out
