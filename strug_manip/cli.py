@@ -30,8 +30,8 @@ from strug_manip.experiments.table import to_markdown
 #: The demo: a short Table I run of the toy domains.
 DEMO_DOMAINS = ("tiger", "extendedtiger", "lightdark1d", "lightdark2d")
 DEMO_SOLVERS = ("random", "pomcp", "pomcpow")
-DEMO_SEEDS = 10
-DEMO_SIMS = 500
+DEMO_SEEDS = 20
+DEMO_SIMS = 1000
 
 
 def _overrides(args: argparse.Namespace) -> dict[str, Any]:
