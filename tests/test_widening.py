@@ -25,7 +25,7 @@ def test_child_counts_obey_k_n_alpha(domain, k_a, al_a, k_o, al_o) -> None:
     planner = cfg.planner(pomdp)
     _, info = planner.act(belief, rng)
     tree = info.extra["tree"]
-    widened = planner.action_widening
+    widened = planner.widening == "dpw"
     checked_a = checked_o = 0
     for h, children in enumerate(tree.belief_children):
         n = tree.belief_visits[h]

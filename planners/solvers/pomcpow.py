@@ -9,16 +9,17 @@ from a particle drawn by weight, so deeper nodes hold properly weighted beliefs 
 with continuous observations. This is POMCPOW.jl's algorithm with ``check_repeat_obs``
 and ``check_repeat_act`` on and the ``MaxUCB`` criterion.
 
-Action widening is on by default only when the action space has continuous
-parameters; on a finite action space every action is a child from the start
-(``action_widening`` forces either). New actions are drawn uniformly from the
-action space; rollouts are uniformly random.
+Action selection comes from :class:`planners.solvers.action_tree.ActionTree`:
+``widening="auto"`` (default) is the published algorithm, DPW over the whole action
+space when it has continuous parameters and every action on a finite space;
+``"hpw"`` swaps in STRUG's hierarchical widening so its effect alone can be measured.
+Rollouts are uniformly random.
 
-Storage is flat lists indexed by node id. Per belief node: visits, child action ids,
-the observation, and its particles (states, rewards, terminal flags, cumulative
-weights for O(log n) sampling). Per action node: visits, value, the action, and the
-list of observation children generated (with repeats, so that a uniform pick from
-it is a pick proportional to how often each observation was generated).
+Storage is flat lists indexed by node id. Per belief node: visits, the observation,
+and its particles (states, rewards, terminal flags, cumulative weights for O(log n)
+sampling). Per action node (beside the ActionTree's statistics): the list of
+observation children generated, with repeats, so that a uniform pick from it is a
+pick proportional to how often each observation was generated.
 """
 
 from __future__ import annotations
@@ -32,7 +33,8 @@ from typing import Any, ClassVar
 import numpy as np
 
 from planners.belief import ParticleBelief
-from planners.errors import ConfigError, check_positive_float
+from planners.errors import check_positive_float
+from planners.solvers.action_tree import ActionTree, check_widening, resolve_widening
 from planners.solvers.base import (
     Budget,
     RootSampler,
@@ -58,8 +60,8 @@ class POMCPOWConfig(TreeSearchConfig):
         k_obs: observation widening coefficient k_o (default 5, the paper's LightDark).
         alpha_obs: observation widening exponent alpha_o in [0, 1] (default 1/15, the
             paper's LightDark).
-        action_widening: ``None`` (default) widens actions only on continuous action
-            spaces; ``True``/``False`` force it on or off.
+        widening: action selection, ``"auto"`` (default: DPW on continuous action
+            spaces, every action on finite ones), ``"all"``, ``"dpw"`` or ``"hpw"``.
     """
 
     name: ClassVar[str] = "pomcpow"
@@ -68,18 +70,13 @@ class POMCPOWConfig(TreeSearchConfig):
     alpha_action: float = 1.0 / 30.0
     k_obs: float = 5.0
     alpha_obs: float = 1.0 / 15.0
-    action_widening: bool | None = None
+    widening: str = "auto"
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        check_positive_float("k_action", self.k_action)
+        check_widening(self.widening, self.k_action, self.alpha_action)
         check_positive_float("k_obs", self.k_obs)
-        check_positive_float("alpha_action", self.alpha_action, allow_zero=True, upper=1.0)
         check_positive_float("alpha_obs", self.alpha_obs, allow_zero=True, upper=1.0)
-        if self.action_widening not in (None, True, False):
-            raise ConfigError(
-                f"action_widening must be None, True or False, got {self.action_widening!r}"
-            )
 
     def planner(self, pomdp: Any) -> POMCPOWPlanner:
         return POMCPOWPlanner(self, pomdp)
@@ -93,55 +90,50 @@ class POMCPOWPlanner:
         self.pomdp = pomdp
         self.space = pomdp.action_space()
         self.depth, self.c, self.gamma = config.resolved(pomdp)
-        widen = config.action_widening
-        self.action_widening = (not self.space.is_discrete) if widen is None else widen
+        self.widening = resolve_widening(config.widening, self.space, "dpw")
 
     def act(self, belief: ParticleBelief, rng: np.random.Generator) -> tuple[Hashable, SearchInfo]:
         cfg = self.config
         budget = Budget(cfg.sims, cfg.time_limit)
-        pomdp = self.pomdp
-        step, loglik = pomdp.step, pomdp.obs_loglik
+        step, loglik = self.pomdp.step, self.pomdp.obs_loglik
         space = self.space
-        depth, c, gamma = self.depth, self.c, self.gamma
-        k_a, al_a, k_o, al_o = cfg.k_action, cfg.alpha_action, cfg.k_obs, cfg.alpha_obs
-        widen_actions = self.action_widening
-        all_actions = list(space.discretized)
-        n_all = len(all_actions)
+        depth, gamma = self.depth, self.gamma
+        k_o, al_o = cfg.k_obs, cfg.alpha_obs
         u = UniformStream(rng)
-        log, sqrt, exp = math.log, math.sqrt, math.exp
+        exp = math.exp
+        tree = ActionTree(space, self.widening, cfg.k_action, cfg.alpha_action, self.c, rng, u)
+        select, backup, a_action, a_n = tree.select, tree.update, tree.a_action, tree.a_n
+        rollout_actions = list(space.discretized) if self.widening == "all" else None
+        n_rollout = len(rollout_actions) if rollout_actions else 0
 
         # Belief (observation) nodes.
-        b_n: list[int] = [0]
-        b_children: list[list[int]] = [[]]
-        b_obs: list[Any] = [None]
-        b_states: list[list[Any]] = [[]]
-        b_rewards: list[list[float]] = [[]]
-        b_done: list[list[bool]] = [[]]
-        b_cdf: list[list[float]] = [[]]
-        # Action nodes.
-        a_n: list[int] = []
-        a_q: list[float] = []
-        a_action: list[Hashable] = []
+        b_n: list[int] = []
+        b_obs: list[Any] = []
+        b_states: list[list[Any]] = []
+        b_rewards: list[list[float]] = []
+        b_done: list[list[bool]] = []
+        b_cdf: list[list[float]] = []
         a_generated: list[list[int]] = []
-        act_lookup: dict[tuple[int, Hashable], int] = {}
         obs_lookup: dict[tuple[int, Any], int] = {}
 
-        def add_action(h: int, a: Hashable) -> None:
-            key = (h, a)
-            if key in act_lookup:
-                return
-            act_lookup[key] = len(a_n)
-            b_children[h].append(len(a_n))
-            a_n.append(0)
-            a_q.append(0.0)
-            a_action.append(a)
-            a_generated.append([])
+        def new_belief_node(o: Any) -> int:
+            b_n.append(0)
+            b_obs.append(o)
+            b_states.append([])
+            b_rewards.append([])
+            b_done.append([])
+            b_cdf.append([])
+            tree.add_belief_node()
+            return len(b_n) - 1
 
         def rollout(s: Any, d: int) -> float:
             total = 0.0
             disc = 1.0
             while d < depth:
-                a = all_actions[int(u() * n_all)] if not widen_actions else space.sample(rng)
+                if rollout_actions is not None:
+                    a = rollout_actions[int(u() * n_rollout)]
+                else:
+                    a = space.sample(rng)
                 s, _, r, done = step(s, a, rng)
                 total += disc * r
                 if done:
@@ -151,44 +143,20 @@ class POMCPOWPlanner:
             return total
 
         def simulate(s: Any, h: int, d: int) -> float:
-            children = b_children[h]
             nh = b_n[h]
-            if widen_actions:
-                if len(children) <= k_a * nh**al_a:
-                    add_action(h, space.sample(rng))
-            elif not children:
-                for a in all_actions:
-                    add_action(h, a)
-            # MaxUCB: the first unvisited child, else the highest UCB.
-            best = -1
-            best_v = -math.inf
-            logn = log(nh) if nh > 0 else 0.0
-            for j in children:
-                n = a_n[j]
-                if n == 0:
-                    best = j
-                    break
-                v = a_q[j] + c * sqrt(logn / n)
-                if v > best_v:
-                    best_v = v
-                    best = j
-            a = a_action[best]
-            generated = a_generated[best]
+            anode, snode = select(h, nh)
+            while len(a_generated) < len(a_n):
+                a_generated.append([])
+            a = a_action[anode]
+            generated = a_generated[anode]
             new_node = False
-            if len(generated) <= k_o * a_n[best] ** al_o:
+            if len(generated) <= k_o * a_n[anode] ** al_o:
                 sp, o, r, done = step(s, a, rng)
-                key = (best, o)
+                key = (anode, o)
                 hao = obs_lookup.get(key)
                 if hao is None:
                     new_node = True
-                    hao = obs_lookup[key] = len(b_n)
-                    b_n.append(0)
-                    b_children.append([])
-                    b_obs.append(o)
-                    b_states.append([])
-                    b_rewards.append([])
-                    b_done.append([])
-                    b_cdf.append([])
+                    hao = obs_lookup[key] = new_belief_node(o)
                 generated.append(hao)
             else:
                 sp, _, r, done = step(s, a, rng)
@@ -205,53 +173,45 @@ class POMCPOWPlanner:
             else:
                 # Continue from a particle drawn by weight (uniformly if all weights are 0).
                 if cdf[-1] > 0.0:
-                    i = bisect_right(cdf, u() * cdf[-1])
-                    i = min(i, len(cdf) - 1)
+                    i = min(bisect_right(cdf, u() * cdf[-1]), len(cdf) - 1)
                 else:
                     i = int(u() * len(cdf))
                 sp, r, done = b_states[hao][i], b_rewards[hao][i], b_done[hao][i]
                 total = r if done or d + 1 >= depth else r + gamma * simulate(sp, hao, d + 1)
             b_n[h] = nh + 1
-            n = a_n[best] + 1
-            a_n[best] = n
-            a_q[best] += (total - a_q[best]) / n
+            backup(anode, snode, total)
             return total
 
+        new_belief_node(None)
         sample_root = RootSampler(belief, rng)
         sims = 0
         while not budget.done(sims):
             simulate(sample_root(), 0, 0)
             sims += 1
 
-        root = b_children[0]
-        q = np.array([a_q[j] for j in root])
-        visits = np.array([a_n[j] for j in root], dtype=np.int64)
-        if len(root) and np.any(visits > 0):
-            best = int(np.argmax(np.where(visits > 0, q, -np.inf)))
-        else:
-            best = 0
+        actions, q, visits = tree.root_stats()
+        best = tree.best_root_action()
         info = SearchInfo(
             sims=sims,
             seconds=budget.elapsed(),
-            tree_nodes=len(b_n) + len(a_n),
-            actions=[a_action[j] for j in root],
+            tree_nodes=len(b_n) + tree.size(),
+            actions=actions,
             q=q,
             visits=visits,
-            extra={"tree": _TreeView(b_n, b_children, a_n, a_generated)},
+            extra={"tree": TreeCounts(b_n, tree.b_children, a_n, a_generated)},
         )
-        action = a_action[root[best]] if root else space.sample(rng)
-        return action, info
+        return (best if best is not None else space.sample(rng)), info
 
 
 @dataclass(frozen=True)
-class _TreeView:
-    """Read-only counts of a finished POMCPOW tree (for tests and diagnostics).
+class TreeCounts:
+    """Read-only counts of a finished tree (for tests and diagnostics).
 
     Attributes:
         belief_visits: N(h) per belief node.
         belief_children: action-node ids per belief node.
         action_visits: N(ha) per action node.
-        action_obs_children: distinct observation-node ids per action node.
+        action_generated: observation-node ids generated per action node (with repeats).
     """
 
     belief_visits: list[int]
@@ -261,4 +221,4 @@ class _TreeView:
 
     def obs_children(self, anode: int) -> int:
         """Number of distinct observation children of action node ``anode``."""
-        return len(set(self.action_generated[anode]))
+        return len(set(self.action_generated[anode])) if anode < len(self.action_generated) else 0

@@ -1,0 +1,196 @@
+"""Action children of belief nodes: full expansion, DPW, or HPW (STRUG's Algorithm 3).
+
+Every tree solver asks the same question at a belief node: which action to simulate
+next. Three answers, chosen by a config's ``widening`` field:
+
+* ``"all"``: every action of the (finite or discretised) action set is a child from
+  the first visit; UCB picks among them.
+* ``"dpw"``: progressive widening over the whole action space (POMCPOW's): while the
+  node has at most ``k * N(h)^alpha`` children, a new action is drawn uniformly from
+  the action space (a uniform schema, then uniform parameters).
+* ``"hpw"``: hierarchical progressive widening (the STRUG paper's Algorithm 3): UCB
+  first picks a *schema* (a controller kind) from per-(node, schema) statistics; then,
+  within that schema, while it has at most ``k * N(h, schema)^alpha`` parameter
+  children a new parameter vector is drawn from the schema's box, and UCB picks among
+  them. A schema without parameters has exactly one child. Promising controllers get
+  their parameters explored without paying for the parameters of the others.
+* ``"auto"``: ``"all"`` on a finite action space, else the solver's default.
+
+UCB is ``Q + c sqrt(log N / n)`` with unvisited children tried first, in order
+(POMCPOW.jl's ``MaxUCB``). Storage is flat lists indexed by node id.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Hashable
+import numpy as np
+
+from planners.errors import ConfigError, check_positive_float
+from planners.pomdp import ActionSpace
+
+WIDENING_MODES = ("auto", "all", "dpw", "hpw")
+
+
+def check_widening(mode: str, k: float, alpha: float) -> None:
+    """Validate a ``widening`` mode and its ``k``, ``alpha``."""
+    if mode not in WIDENING_MODES:
+        raise ConfigError(f"widening must be one of {', '.join(WIDENING_MODES)}, got {mode!r}")
+    check_positive_float("k_action", k)
+    check_positive_float("alpha_action", alpha, allow_zero=True, upper=1.0)
+
+
+def resolve_widening(mode: str, space: ActionSpace, continuous_default: str) -> str:
+    """The concrete mode (``all``, ``dpw`` or ``hpw``) for ``space``."""
+    if mode == "auto":
+        return "all" if space.is_discrete else continuous_default
+    return mode
+
+
+class ActionTree:
+    """Action nodes hanging off belief nodes, with UCB selection and widening.
+
+    Attributes:
+        a_n: visits per action node.
+        a_q: value estimate per action node.
+        a_action: the action of each action node.
+        b_children: action-node ids per belief node (all schemas).
+    """
+
+    def __init__(
+        self,
+        space: ActionSpace,
+        mode: str,
+        k: float,
+        alpha: float,
+        c: float,
+        rng: np.random.Generator,
+        uniform: Callable[[], float],
+    ) -> None:
+        if mode not in ("all", "dpw", "hpw"):
+            raise ConfigError(f"ActionTree mode must be all, dpw or hpw, got {mode!r}")
+        self.space, self.mode, self.k, self.alpha, self.c = space, mode, k, alpha, c
+        self.rng, self.u = rng, uniform
+        self.actions = list(space.discretized)
+        self.n_schemas = len(space.schemas)
+        self.a_n: list[int] = []
+        self.a_q: list[float] = []
+        self.a_action: list[Hashable] = []
+        self.b_children: list[list[int]] = []
+        self._lookup: dict[tuple[int, Hashable], int] = {}
+        # HPW: schema nodes (one per belief node and schema), contiguous per belief node.
+        self.s_n: list[int] = []
+        self.s_q: list[float] = []
+        self.s_children: list[list[int]] = []
+        self.b_schema_first: list[int] = []
+
+    def add_belief_node(self) -> None:
+        """Register the next belief node id (call once per belief node, in id order)."""
+        self.b_children.append([])
+        self.b_schema_first.append(-1)
+
+    def _add_action(self, h: int, a: Hashable) -> int:
+        key = (h, a)
+        node = self._lookup.get(key)
+        if node is None:
+            node = self._lookup[key] = len(self.a_n)
+            self.b_children[h].append(node)
+            self.a_n.append(0)
+            self.a_q.append(0.0)
+            self.a_action.append(a)
+        return node
+
+    def _ucb(self, children: list[int], n_parent: int) -> int:
+        a_n, a_q, c = self.a_n, self.a_q, self.c
+        logn = math.log(n_parent) if n_parent > 0 else 0.0
+        best, best_v = children[0], -math.inf
+        for j in children:
+            n = a_n[j]
+            if n == 0:
+                return j
+            v = a_q[j] + c * math.sqrt(logn / n)
+            if v > best_v:
+                best_v, best = v, j
+        return best
+
+    def select(self, h: int, n_h: int) -> tuple[int, int]:
+        """``(action node, schema node or -1)`` to simulate from belief node ``h``.
+
+        Args:
+            h: the belief node.
+            n_h: its visit count N(h) before this simulation.
+        """
+        children = self.b_children[h]
+        if self.mode == "all":
+            if not children:
+                for a in self.actions:
+                    self._add_action(h, a)
+            return self._ucb(children, n_h), -1
+        if self.mode == "dpw":
+            if len(children) <= self.k * n_h**self.alpha:
+                self._add_action(h, self.space.sample(self.rng))
+            return self._ucb(children, n_h), -1
+        return self._select_hpw(h, n_h)
+
+    def _select_hpw(self, h: int, n_h: int) -> tuple[int, int]:
+        first = self.b_schema_first[h]
+        if first < 0:
+            first = self.b_schema_first[h] = len(self.s_n)
+            for _ in range(self.n_schemas):
+                self.s_n.append(0)
+                self.s_q.append(0.0)
+                self.s_children.append([])
+        # 1) UCB over the discrete schema choice.
+        s_n, s_q, c = self.s_n, self.s_q, self.c
+        snode = -1
+        logn = math.log(n_h) if n_h > 0 else 0.0
+        best_v = -math.inf
+        for j in range(first, first + self.n_schemas):
+            n = s_n[j]
+            if n == 0:
+                snode = j
+                break
+            v = s_q[j] + c * math.sqrt(logn / n)
+            if v > best_v:
+                best_v, snode = v, j
+        schema = snode - first
+        # 2) Progressive widening over that schema's continuous parameters.
+        kids = self.s_children[snode]
+        dim = self.space.schemas[schema].dim
+        if (not kids) or (dim > 0 and len(kids) <= self.k * s_n[snode] ** self.alpha):
+            params = self.space.sample_params(schema, self.rng)
+            node = self._add_action(h, self.space.build(schema, params))
+            if node not in kids:
+                kids.append(node)
+        return self._ucb(kids, s_n[snode]), snode
+
+    def update(self, anode: int, snode: int, total: float) -> None:
+        """Back up the return ``total`` of a simulation through ``anode`` (and ``snode``)."""
+        n = self.a_n[anode] + 1
+        self.a_n[anode] = n
+        self.a_q[anode] += (total - self.a_q[anode]) / n
+        if snode >= 0:
+            n = self.s_n[snode] + 1
+            self.s_n[snode] = n
+            self.s_q[snode] += (total - self.s_q[snode]) / n
+
+    def root_stats(self) -> tuple[list[Hashable], np.ndarray, np.ndarray]:
+        """Actions, values and visits of the root's children."""
+        root = self.b_children[0] if self.b_children else []
+        return (
+            [self.a_action[j] for j in root],
+            np.array([self.a_q[j] for j in root]),
+            np.array([self.a_n[j] for j in root], dtype=np.int64),
+        )
+
+    def best_root_action(self) -> Hashable | None:
+        """The visited root action with the highest value (None if nothing was visited)."""
+        actions, q, visits = self.root_stats()
+        if not actions or not np.any(visits > 0):
+            return None
+        return actions[int(np.argmax(np.where(visits > 0, q, -np.inf)))]
+
+    def size(self) -> int:
+        """Number of action nodes."""
+        return len(self.a_n)
+
