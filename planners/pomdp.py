@@ -143,6 +143,15 @@ class ActionSpace:
         return repr(a)
 
 
+def format_value(x: Any) -> str:
+    """Floats with 3 decimals, tuples element-wise, anything else as ``str``."""
+    if isinstance(x, tuple):
+        return "(" + ", ".join(format_value(v) for v in x) + ")"
+    if isinstance(x, float | np.floating):
+        return f"{x:.3f}"
+    return str(x)
+
+
 class GenerativePOMDP(ABC):
     """Base class of the domains: the protocol solvers use, plus sensible defaults.
 
@@ -179,6 +188,26 @@ class GenerativePOMDP(ABC):
     def action_space(self) -> ActionSpace:
         """The action space (the same object on every call)."""
 
+    def transition_many(
+        self, states: list[Any], a: Hashable, rng: np.random.Generator
+    ) -> tuple[list[Any], np.ndarray, np.ndarray]:
+        """Step every state in ``states`` with ``a``, observations discarded.
+
+        Returns ``(next states, rewards (N,), done flags (N,))``. The default loops over
+        ``step``; domains override it with array code where the belief-tree solvers'
+        particle propagation dominates their cost.
+        """
+        out = [self.step(s, a, rng) for s in states]
+        return (
+            [x.state for x in out],
+            np.array([x.reward for x in out], dtype=float),
+            np.array([x.done for x in out], dtype=bool),
+        )
+
+    def obs_loglik_many(self, o: Any, states: list[Any], a: Hashable) -> np.ndarray:
+        """``obs_loglik(o, s, a)`` for every ``s`` in ``states``, shape ``(N,)``."""
+        return np.array([self.obs_loglik(o, s, a) for s in states], dtype=float)
+
     def initial_belief(self, rng: np.random.Generator, n_particles: int) -> ParticleBelief:
         """``n_particles`` equally weighted draws from b0, each its own origin."""
         from planners.belief import ParticleBelief
@@ -210,13 +239,26 @@ class GenerativePOMDP(ABC):
         """
         return None
 
+    def entropy_features(self, states: list[Any]) -> np.ndarray | None:
+        """Continuous features of ``states`` for entropy estimates, shape ``(N, d)``.
+
+        None (the default for ints and tuples of ints) means the states are discrete and
+        their entropy is categorical; see :mod:`planners.entropy`.
+        """
+        first = states[0]
+        if isinstance(first, int | np.integer) or (
+            isinstance(first, tuple) and all(isinstance(x, int | np.integer) for x in first)
+        ):
+            return None
+        return np.asarray(states, dtype=float).reshape(len(states), -1)
+
+    def format_state(self, s: Any) -> str:
+        """A readable state."""
+        return format_value(s)
+
     def format_obs(self, o: Any) -> str:
         """A readable observation."""
-        if isinstance(o, tuple):
-            return "(" + ", ".join(f"{x:.3f}" for x in o) + ")"
-        if isinstance(o, float):
-            return f"{o:.3f}"
-        return str(o)
+        return format_value(o)
 
     def summarize_belief(self, belief: ParticleBelief) -> str:
         """A one-line summary of a belief (domains override with something meaningful)."""

@@ -128,6 +128,11 @@ def cmd_run(args: argparse.Namespace) -> int:
         )
         if q:
             print(f"    Q/N at root: {q}")
+        if rec.tru is not None or rec.entropy is not None:
+            what = f"TRU={rec.tru:.4f}" if rec.tru is not None else f"H={rec.entropy:.3f} nats"
+            phase = f" phase={rec.phase}" if rec.phase else ""
+            bonus = "  ".join(f"{a}:{v:+.3f}" for a, v in rec.bonus.items())
+            print(f"    root {what}{phase}; bonus per action: {bonus}")
 
     if not args.json:
         print(f"{args.domain} / {args.solver} / seed {args.seed}: {config}")

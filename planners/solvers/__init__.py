@@ -9,16 +9,23 @@ from __future__ import annotations
 from typing import Any
 
 from planners.errors import UnknownNameError
+from planners.solvers.active_learning import ActiveLearningConfig, ActiveLearningPlanner
 from planners.solvers.base import SearchInfo, SolverConfig, TreeSearchConfig
+from planners.solvers.belief_tree import BeliefTreeConfig
+from planners.solvers.entropy_regularized import EntropyConfig, EntropyPlanner
 from planners.solvers.pomcp import POMCPConfig, POMCPPlanner
 from planners.solvers.pomcpow import POMCPOWConfig, POMCPOWPlanner
 from planners.solvers.random_solver import RandomConfig, RandomPlanner
+from planners.solvers.strug import STRUGConfig, STRUGPlanner
 
 #: Canonical solver name -> config class, in the row order of the paper's Table I.
 SOLVERS: dict[str, type[SolverConfig]] = {
     "random": RandomConfig,
     "pomcp": POMCPConfig,
     "pomcpow": POMCPOWConfig,
+    "entropy": EntropyConfig,
+    "active": ActiveLearningConfig,
+    "strug": STRUGConfig,
 }
 
 #: One-line descriptions for ``strug list``.
@@ -26,6 +33,9 @@ SOLVER_SUMMARIES: dict[str, str] = {
     "random": "uniformly random actions (no search)",
     "pomcp": "POMCP (Silver & Veness 2010); continuous domains discretised",
     "pomcpow": "POMCPOW (Sunberg & Kochenderfer 2018): double progressive widening",
+    "entropy": "Entropy Regularized: belief-tree search paying beta per nat of entropy reduced",
+    "active": "Active Learning: reduce entropy below a threshold, then plan in the MAP model",
+    "strug": "STRUG: belief-tree search paying beta per unit of task-relevant uncertainty reduced",
 }
 
 
@@ -41,6 +51,13 @@ def make_solver(name: str, overrides: dict[str, Any] | None = None) -> SolverCon
 
 __all__ = [
     "SOLVERS",
+    "ActiveLearningConfig",
+    "ActiveLearningPlanner",
+    "BeliefTreeConfig",
+    "EntropyConfig",
+    "EntropyPlanner",
+    "STRUGConfig",
+    "STRUGPlanner",
     "SOLVER_SUMMARIES",
     "POMCPConfig",
     "POMCPOWConfig",

@@ -72,8 +72,32 @@ class LightDark1D(GenerativePOMDP):
         y = s + (a - 1)
         return Step(y, y + self.sigma(y) * rng.standard_normal(), 0.0, False)
 
+    def plan_for(self, s: float, rng: np.random.Generator) -> list[int]:
+        """The uncertainty-free plan: unit moves toward 0 until |y| < 1, then declare."""
+        plan, y = [], s
+        while abs(y) >= 1.0 and len(plan) < self.max_steps - 1:
+            step = -1.0 if y > 0 else 1.0
+            plan.append(2 if step > 0 else 0)
+            y += step
+        return [*plan, 1]
+
     def obs_loglik(self, o: Any, s_next: float, a: Hashable) -> float:
         return _normal_logpdf(o, s_next, self.sigma(s_next))
+
+    def transition_many(
+        self, states: list[float], a: Hashable, rng: np.random.Generator
+    ) -> tuple[list[float], np.ndarray, np.ndarray]:
+        y = np.asarray(states, dtype=float)
+        if a == 1:
+            r = np.where(np.abs(y) < 1.0, self.correct_reward, self.incorrect_reward)
+            return list(states), r, np.ones(len(y), dtype=bool)
+        return (y + (a - 1)).tolist(), np.zeros(len(y)), np.zeros(len(y), dtype=bool)
+
+    def obs_loglik_many(self, o: Any, states: list[float], a: Hashable) -> np.ndarray:
+        y = np.asarray(states, dtype=float)
+        sig = np.abs(y - 5.0) / math.sqrt(2.0) + 0.01
+        z = (o - y) / sig
+        return -0.5 * z * z - np.log(sig) - _LOG_SQRT_2PI
 
     def reinvigorate(self, o: Any, a: Hashable, n: int, rng: np.random.Generator) -> list[float]:
         """Positions drawn from N(o, sigma(o)^2): where the observation says we are."""
@@ -148,9 +172,42 @@ class LightDark2D(GenerativePOMDP):
         y = min(max(y + dy, 0.0), self.size)
         return Step((x, y), (x + self.sigma(x) * nx, y + self.sigma(y) * ny), 0.0, False)
 
+    def plan_for(self, s: tuple[float, float], rng: np.random.Generator) -> list[HybridAction]:
+        """The uncertainty-free plan: move straight (dy = 0) to x = 5, then stop.
+
+        Each move covers min(1, remaining distance), so the plan ends exactly on the goal
+        line; executed from another particle it ends |x_j - x_i| away from it, which is
+        what makes only x task-relevant.
+        """
+        plan, x = [], s[0]
+        while abs(self.goal_x - x) > 1e-9 and len(plan) < self.max_steps - 1:
+            dx = min(max(self.goal_x - x, -1.0), 1.0)
+            plan.append(HybridAction(_MOVE, (dx, 0.0)))
+            x += dx
+        return [*plan, HybridAction(_STOP, ())]
+
     def obs_loglik(self, o: Any, s_next: tuple[float, float], a: Hashable) -> float:
         x, y = s_next
         return _normal_logpdf(o[0], x, self.sigma(x)) + _normal_logpdf(o[1], y, self.sigma(y))
+
+    def transition_many(
+        self, states: list[tuple[float, float]], a: Hashable, rng: np.random.Generator
+    ) -> tuple[list[tuple[float, float]], np.ndarray, np.ndarray]:
+        xy = np.asarray(states, dtype=float).reshape(-1, 2)
+        schema, params = a  # type: ignore[misc]
+        if schema == _STOP:
+            hit = np.abs(xy[:, 0] - self.goal_x) < self.goal_halfwidth
+            return list(states), np.where(hit, 10.0, -10.0), np.ones(len(xy), dtype=bool)
+        moved = np.clip(xy + np.asarray(params), 0.0, self.size)
+        return list(map(tuple, moved.tolist())), np.zeros(len(xy)), np.zeros(len(xy), dtype=bool)
+
+    def obs_loglik_many(
+        self, o: Any, states: list[tuple[float, float]], a: Hashable
+    ) -> np.ndarray:
+        xy = np.asarray(states, dtype=float).reshape(-1, 2)
+        sig = 0.1 + 0.5 * (10.0 - xy)
+        z = (np.asarray(o, dtype=float) - xy) / sig
+        return (-0.5 * z * z - np.log(sig) - _LOG_SQRT_2PI).sum(axis=1)
 
     def reinvigorate(
         self, o: Any, a: Hashable, n: int, rng: np.random.Generator

@@ -65,6 +65,10 @@ class Tiger(GenerativePOMDP):
         r = self.tiger_reward if a - 1 == s else self.treasure_reward
         return Step(s, HEAR_NOTHING, r, True)
 
+    def plan_for(self, s: int, rng: np.random.Generator) -> list[int]:
+        """The uncertainty-free plan: open the door without the tiger."""
+        return [OPEN_RIGHT if s == 0 else OPEN_LEFT]
+
     def obs_loglik(self, o: Any, s_next: int, a: Hashable) -> float:
         if a == LISTEN:
             if o == HEAR_NOTHING:
@@ -155,6 +159,10 @@ class ExtendedTiger(Tiger):
             return Step((tiger, listens), o, self.listen_reward, False)
         r = self.tiger_reward if a - 1 == tiger else self.treasure_reward
         return Step(s, HEAR_NOTHING, r, True)
+
+    def plan_for(self, s: tuple[int, int], rng: np.random.Generator) -> list[int]:
+        """The uncertainty-free plan: open the door without the tiger."""
+        return [OPEN_RIGHT if s[0] == 0 else OPEN_LEFT]
 
     def obs_loglik(self, o: Any, s_next: tuple[int, int], a: Hashable) -> float:
         tiger, listens = s_next

@@ -40,6 +40,13 @@ class StepRecord:
         belief: summary of the belief *after* the update.
         q: root value per action name (tree solvers).
         visits: root visits per action name (tree solvers).
+        bonus: mean belief-dependent bonus per root action name (STRUG: beta times the
+            TRU reduction; Entropy Regularized, Active Learning: beta times the entropy
+            reduction).
+        tru: TRU of the root belief (STRUG), else None.
+        entropy: entropy of the root belief [nats] (Entropy, Active Learning), else None.
+        phase: Active Learning's phase, ``"learn"`` or ``"exploit"``, else None.
+        state: the true state before the step (formatted).
     """
 
     step: int
@@ -52,6 +59,11 @@ class StepRecord:
     belief: str
     q: dict[str, float] = field(default_factory=dict)
     visits: dict[str, int] = field(default_factory=dict)
+    bonus: dict[str, float] = field(default_factory=dict)
+    tru: float | None = None
+    entropy: float | None = None
+    phase: str | None = None
+    state: str = ""
 
     def to_json(self) -> dict[str, Any]:
         return asdict(self)
@@ -66,12 +78,14 @@ class EpisodeResult:
         steps: the step records.
         seconds: wall time of the whole episode [s].
         true_initial_state: the drawn true state (repr).
+        trajectory: the true states, the initial one first, then after every step.
     """
 
     discounted_return: float
     steps: list[StepRecord]
     seconds: float
     true_initial_state: str
+    trajectory: list[Any] = field(default_factory=list)
 
     @property
     def mean_sims(self) -> float:
@@ -111,6 +125,8 @@ def run_episode(
     names = pomdp.action_space().name
     total, disc = 0.0, 1.0
     records: list[StepRecord] = []
+    trajectory = [state]
+    initial = repr(state)
     for t in range(pomdp.max_steps):
         action, info = planner.act(belief, plan_rng)
         state_next, obs, reward, done = pomdp.step(state, action, world_rng)
@@ -129,11 +145,24 @@ def run_episode(
             belief="(episode over)" if done else pomdp.summarize_belief(belief),
             q={names(a): float(v) for a, v in zip(info.actions, info.q, strict=True)},
             visits={names(a): int(v) for a, v in zip(info.actions, info.visits, strict=True)},
+            bonus={
+                names(a): float(v)
+                for a, v in zip(info.actions, info.extra.get("bonus", ()), strict=False)
+            },
+            tru=_optional_float(info.extra.get("tru")),
+            entropy=_optional_float(info.extra.get("entropy")),
+            phase=info.extra.get("phase"),
+            state=pomdp.format_state(state),
         )
         records.append(rec)
+        trajectory.append(state_next)
         if on_step is not None:
             on_step(rec)
         if done:
             break
         state = state_next
-    return EpisodeResult(total, records, time.perf_counter() - t0, repr(state))
+    return EpisodeResult(total, records, time.perf_counter() - t0, initial, trajectory)
+
+
+def _optional_float(x: Any) -> float | None:
+    return None if x is None else float(x)

@@ -1,0 +1,322 @@
+"""Belief-tree search with belief-dependent rewards: the engine of STRUG and its baselines.
+
+STRUG's Algorithm 2 steps a *belief*: ``b', o, r <- G(b, a)``. Here every tree node
+holds a weighted set of the same M particles (the root's M draws from the runner's
+belief, particle i of every node descending from root particle i), as in PFT-DPW
+(Sunberg & Kochenderfer 2018). Expanding ``(b, a)``:
+
+1. draw one particle j by weight and step it: its observation ``o`` names the child;
+2. for a child not seen before, step every other particle with positive weight, and
+   reweight each by ``Z(o | s'_i, a)`` (``obs_loglik``): the child is the exact
+   particle-filter posterior ``b'``, so a belief-dependent value of it (TRU over the
+   M root particles, or entropy) is meaningful from its first visit;
+3. the transition's reward is the belief-expected reward ``sum_i w_i r_i``.
+
+The value backed up through a child is ``reward_weight * r + bonus + gamma * V(b')``
+with ``bonus = beta * (value(b) - value(b'))``: a reduction of TRU (STRUG) or of
+entropy (Entropy Regularized) pays. A new child gets a random rollout from one of its
+particles (drawn by weight), without bonus, as in the paper's Algorithm 2.
+
+Actions come from :class:`planners.solvers.action_tree.ActionTree` (HPW by default on
+hybrid action spaces); observations are progressively widened (``k_obs * N(ha) ^
+alpha_obs`` children; a discrete observation seen again reuses its child).
+
+Particles that reached a terminal state stay in the child they reached it in and drop
+out (weight 0) below it; a node whose particles are all terminal ends the simulation.
+"""
+
+from __future__ import annotations
+
+import math
+from bisect import bisect_right
+from collections.abc import Callable, Hashable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from planners.errors import ConfigError, check_positive_float, check_positive_int
+from planners.solvers.action_tree import ActionTree, check_widening, resolve_widening
+from planners.solvers.base import Budget, TreeSearchConfig, UniformStream
+
+#: Leaf estimators of a new belief node.
+ROLLOUTS = ("random", "plan")
+
+#: A belief-dependent node value: ``value(states, weights)`` with weights shape ``(M,)``.
+NodeValue = Callable[[list[Any], np.ndarray], float]
+
+
+@dataclass(frozen=True)
+class BeliefTreeConfig(TreeSearchConfig):
+    """Hyper-parameters shared by the belief-tree solvers (STRUG, Entropy, Active).
+
+    Attributes:
+        sims: simulations per decision (default 1000).
+        time_limit: wall time per decision [s] (default None).
+        depth: maximum search depth incl. rollout (default: the domain's ``max_steps``).
+        c: UCB exploration constant (default: the domain's largest |reward|).
+        discount: search discount (default: the domain's).
+        particles: M, particles per belief node, drawn from the runner's belief at
+            every decision (default 32).
+        beta: weight of the belief-dependent bonus (default 10, the paper's).
+        k_action: action widening coefficient k (default 10).
+        alpha_action: action widening exponent alpha in [0, 1] (default 1/30).
+        k_obs: observation widening coefficient (default 5).
+        alpha_obs: observation widening exponent in [0, 1] (default 1/15).
+        widening: ``"auto"`` (default: HPW on hybrid action spaces, every action on
+            finite ones), ``"all"``, ``"dpw"`` or ``"hpw"``.
+        rollout: leaf estimate of a new node: ``"random"`` (uniform random actions from
+            one particle drawn by weight) or ``"plan"`` (draw two particles i, j by
+            weight and execute i's uncertainty-free plan, ``pomdp.plan_for``, from j:
+            its expectation is the value of committing to a plan under the node's
+            belief, high where the belief is concentrated). Default ``"random"``;
+            STRUG, which owns the uncertainty-free planner, defaults to ``"plan"``.
+    """
+
+    particles: int = 32
+    beta: float = 10.0
+    k_action: float = 10.0
+    alpha_action: float = 1.0 / 30.0
+    k_obs: float = 5.0
+    alpha_obs: float = 1.0 / 15.0
+    widening: str = "auto"
+    rollout: str = "random"
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        check_positive_int("particles", self.particles)
+        if self.rollout not in ROLLOUTS:
+            raise ConfigError(f"rollout must be one of {', '.join(ROLLOUTS)}, got {self.rollout!r}")
+        check_positive_float("beta", self.beta, allow_zero=True)
+        check_widening(self.widening, self.k_action, self.alpha_action)
+        check_positive_float("k_obs", self.k_obs)
+        check_positive_float("alpha_obs", self.alpha_obs, allow_zero=True, upper=1.0)
+
+
+@dataclass
+class TreeResult:
+    """What one belief-tree search found.
+
+    Attributes:
+        actions: root action children; ``q`` and ``visits`` per child.
+        q: value per root action, shape ``(A,)``.
+        visits: visits per root action, shape ``(A,)``.
+        bonus: mean bonus earned by the root action's observation children, ``(A,)``.
+        best: the visited root action with the highest value (None if none visited).
+        root_value: the belief-dependent value of the root (TRU or entropy), or NaN.
+        sims: simulations run.
+        belief_nodes: belief nodes created.
+        action_nodes: action nodes created.
+        seconds: search wall time [s].
+        tree: the action tree (for inspection in tests).
+    """
+
+    actions: list[Hashable]
+    q: np.ndarray
+    visits: np.ndarray
+    bonus: np.ndarray
+    best: Hashable | None
+    root_value: float
+    sims: int
+    belief_nodes: int
+    action_nodes: int
+    seconds: float
+    tree: ActionTree = field(repr=False)
+
+
+def belief_tree_search(
+    pomdp: Any,
+    config: BeliefTreeConfig,
+    root_states: Sequence[Any],
+    root_weights: np.ndarray,
+    rng: np.random.Generator,
+    *,
+    node_value: NodeValue | None,
+    beta: float,
+    reward_weight: float = 1.0,
+    c: float | None = None,
+    terminal_bonus: Callable[[float], float] | None = None,
+) -> TreeResult:
+    """Search from the belief ``(root_states, root_weights)``.
+
+    Args:
+        pomdp: the generative model.
+        config: budgets and widening (its ``beta`` is ignored in favour of ``beta``).
+        root_states: the M root particles.
+        root_weights: their weights, shape ``(M,)``.
+        rng: all randomness of the search.
+        node_value: belief-dependent value whose reduction earns ``beta`` per unit; None
+            for no bonus.
+        beta: bonus weight.
+        reward_weight: weight of the task reward (0 for pure information gathering).
+        c: UCB constant (default: the config's, else the domain's largest |reward|).
+        terminal_bonus: bonus of a transition that ends the episode, as a function of
+            the parent's value (default: none).
+    """
+    budget = Budget(config.sims, config.time_limit)
+    depth, c_default, gamma = config.resolved(pomdp)
+    c = c_default if c is None else c
+    space = pomdp.action_space()
+    widening = resolve_widening(config.widening, space, "hpw")
+    step, loglik = pomdp.step, pomdp.obs_loglik
+    discrete_obs = pomdp.discrete_observations
+    k_o, al_o = config.k_obs, config.alpha_obs
+    u = UniformStream(rng)
+    exp = math.exp
+    tree = ActionTree(space, widening, config.k_action, config.alpha_action, c, rng, u)
+    select, backup, a_action, a_n = tree.select, tree.update, tree.a_action, tree.a_n
+    rollout_actions = list(space.discretized) if widening == "all" else None
+    m = len(root_states)
+    with_bonus = node_value is not None and beta > 0.0
+
+    b_n: list[int] = []
+    b_states: list[list[Any]] = []
+    b_w: list[np.ndarray] = []
+    b_cdf: list[list[float]] = []
+    b_alive: list[list[bool]] = []
+    b_terminal: list[bool] = []
+    b_reward: list[float] = []
+    b_bonus: list[float] = []
+    b_value: list[float] = []
+    a_generated: list[list[int]] = []
+    obs_lookup: dict[tuple[int, Any], int] = {}
+
+    def add_node(states: list[Any], w: np.ndarray, alive: list[bool], r: float, parent: int) -> int:
+        w_alive = [wi if ok else 0.0 for wi, ok in zip(w.tolist(), alive, strict=True)]
+        cdf, acc = [], 0.0
+        for wi in w_alive:
+            acc += wi
+            cdf.append(acc)
+        terminal = acc <= 0.0
+        # Information that arrives with the episode's end cannot be used: no bonus.
+        value = node_value(states, w) if with_bonus and not terminal else math.nan
+        b_n.append(0)
+        b_states.append(states)
+        b_w.append(w)
+        b_cdf.append(cdf)
+        b_alive.append(alive)
+        b_terminal.append(terminal)
+        b_reward.append(r)
+        b_value.append(value)
+        if parent < 0 or not with_bonus:
+            bonus = 0.0
+        elif terminal:
+            bonus = terminal_bonus(b_value[parent]) if terminal_bonus is not None else 0.0
+        else:
+            bonus = beta * (b_value[parent] - value)
+        b_bonus.append(bonus)
+        tree.add_belief_node()
+        return len(b_n) - 1
+
+    def draw(h: int) -> int:
+        cdf = b_cdf[h]
+        return min(bisect_right(cdf, u() * cdf[-1]), m - 1)
+
+    transition_many, loglik_many = pomdp.transition_many, pomdp.obs_loglik_many
+
+    def expand(h: int, anode: int) -> tuple[int, bool]:
+        """The child of ``(h, a)`` reached by one observation; True if it is new."""
+        a = a_action[anode]
+        states, w, alive_h = b_states[h], b_w[h], b_alive[h]
+        j = draw(h)
+        sj, o, rj, done_j = step(states[j], a, rng)
+        key = (anode, o) if discrete_obs else None
+        if key is not None and key in obs_lookup:
+            return obs_lookup[key], False
+        # Propagate the other live, weighted particles (weightless or terminal ones stay).
+        idx = [i for i, wi in enumerate(w.tolist()) if wi > 0.0 and alive_h[i] and i != j]
+        nxt, rew, done = transition_many([states[i] for i in idx], a, rng)
+        idx.append(j)
+        nxt.append(sj)
+        rew = np.append(rew, rj)
+        done = np.append(done, done_j)
+        new_states = list(states)
+        for i, s in zip(idx, nxt, strict=True):
+            new_states[i] = s
+        alive = [False] * m
+        for i, d_i in zip(idx, done.tolist(), strict=True):
+            alive[i] = not d_i
+        w_prior = w[idx]
+        logw = np.full(m, -np.inf)
+        logw[idx] = np.log(w_prior) + loglik_many(o, nxt, a)
+        top = logw.max()
+        w_new = np.exp(logw - top) if np.isfinite(top) else w.copy()
+        w_new /= w_new.sum()
+        reward = float(w_prior @ rew / w_prior.sum())
+        child = add_node(new_states, w_new, alive, reward, h)
+        if key is not None:
+            obs_lookup[key] = child
+        return child, True
+
+    plan_for = getattr(pomdp, "plan_for", None) if config.rollout == "plan" else None
+
+    def rollout(h: int, d: int) -> float:
+        s = b_states[h][draw(h)]
+        total, disc = 0.0, 1.0
+        if plan_for is not None:
+            for a in plan_for(b_states[h][draw(h)], rng)[: depth - d]:
+                s, _, r, done = step(s, a, rng)
+                total += disc * r
+                if done:
+                    break
+                disc *= gamma
+            return total
+        while d < depth:
+            if rollout_actions is not None:
+                a = rollout_actions[int(u() * len(rollout_actions))]
+            else:
+                a = space.sample(rng)
+            s, _, r, done = step(s, a, rng)
+            total += disc * r
+            if done:
+                break
+            disc *= gamma
+            d += 1
+        return total
+
+    def simulate(h: int, d: int) -> float:
+        nh = b_n[h]
+        anode, snode = select(h, nh)
+        while len(a_generated) < len(a_n):
+            a_generated.append([])
+        generated = a_generated[anode]
+        if len(generated) <= k_o * a_n[anode] ** al_o:
+            child, new = expand(h, anode)
+            generated.append(child)
+        else:
+            child, new = generated[int(u() * len(generated))], False
+        total = reward_weight * b_reward[child] + b_bonus[child]
+        if not b_terminal[child] and d + 1 < depth:
+            future = rollout(child, d + 1) if new else simulate(child, d + 1)
+            total += gamma * future
+        b_n[h] = nh + 1
+        backup(anode, snode, total)
+        return total
+
+    w0 = np.asarray(root_weights, dtype=float)
+    add_node(list(root_states), w0 / w0.sum(), [True] * m, 0.0, -1)
+    sims = 0
+    while not budget.done(sims):
+        simulate(0, 0)
+        sims += 1
+
+    actions, q, visits = tree.root_stats()
+    bonus = np.array(
+        [
+            float(np.mean([b_bonus[ch] for ch in a_generated[j]])) if a_generated[j] else 0.0
+            for j in tree.b_children[0]
+        ]
+    )
+    return TreeResult(
+        actions=actions,
+        q=q,
+        visits=visits,
+        bonus=bonus,
+        best=tree.best_root_action(),
+        root_value=b_value[0] if with_bonus else math.nan,
+        sims=sims,
+        belief_nodes=len(b_n),
+        action_nodes=tree.size(),
+        seconds=budget.elapsed(),
+        tree=tree,
+    )
