@@ -8,13 +8,15 @@ over the initial particles: STRUG's TRU is computed from exactly that.
 
 Two updates (:func:`update_belief` picks by ``pomdp.discrete_observations``):
 
-* **Discrete observations, exact match** (POMCP's rejection update): draw particles
-  by weight, propagate each through G(s, a), keep those whose simulated observation
-  equals the real one, until ``n`` are kept or ``max_tries_per_particle * n`` draws
-  were spent. *Fallback* when fewer than ``min_match_fraction * n`` matched: weight
-  every propagated particle by ``exp(obs_loglik)`` instead (exact for models whose
-  observation depends on ``(s', a)`` only). Zero total likelihood falls through to
-  reinvigoration, below.
+* **Discrete observations, exact match** (POMCP's rejection update): propagate every
+  particle once through G(s, a) and keep, with its weight, each whose simulated
+  observation equals the real one; when fewer than ``min_match_fraction * n`` match,
+  keep drawing particles by weight and propagating them (rejection sampling) until
+  enough match or ``max_tries_per_particle * n`` draws were spent; resample
+  (systematic) back to ``n`` particles when the count or the ESS fell. *Fallback*
+  when still too few matched: weight every propagated particle by ``exp(obs_loglik)``
+  instead (exact for models whose observation depends on ``(s', a)`` only). Zero
+  total likelihood falls through to reinvigoration, below.
 * **Continuous observations, likelihood weighting**: propagate every particle once,
   multiply its weight by ``Z(o | s', a)`` (computed in log space, shifted by the max
   so that tiny likelihoods do not underflow), normalise, and resample
@@ -192,36 +194,54 @@ def _update_exact_match(
     min_match_fraction: float,
     resample_ess: float,
 ) -> tuple[ParticleBelief, UpdateInfo]:
-    kept: list[Any] = []
-    kept_origin: list[int] = []
-    proposed: list[Any] = []
-    proposed_origin: list[int] = []
-    draws = 0
-    budget = max_tries_per_particle * n
     step = pomdp.step
-    while len(kept) < n and draws < budget:
-        batch = belief.sample_indices(rng, min(budget - draws, 2 * (n - len(kept)) + 16))
-        for i in batch.tolist():
+    # Pass 1: every particle once, in order, keeping its weight. An observation every
+    # particle explains (Tiger's "nothing") then leaves the belief exactly as it was,
+    # instead of adding multinomial resampling noise at every step.
+    kept, kept_w, kept_origin = [], [], []
+    proposed, proposed_origin = [], []
+    for s, w, org in zip(
+        belief.states, belief.weights.tolist(), belief.origin.tolist(), strict=True
+    ):
+        s_next, o_sim, _, _ = step(s, a, rng)
+        proposed.append(s_next)
+        proposed_origin.append(org)
+        if o_sim == o:
+            kept.append(s_next)
+            kept_w.append(w)
+            kept_origin.append(org)
+    draws = len(belief)
+    # Pass 2: too few matches; keep drawing particles by weight (rejection sampling).
+    budget = max_tries_per_particle * n
+    extra, extra_origin = [], []
+    while len(kept) + len(extra) < min_match_fraction * n and draws < budget:
+        for i in belief.sample_indices(rng, min(budget - draws, n)).tolist():
             s_next, o_sim, _, _ = step(belief.states[i], a, rng)
             draws += 1
-            if len(proposed) < n:
-                proposed.append(s_next)
-                proposed_origin.append(int(belief.origin[i]))
             if o_sim == o:
-                kept.append(s_next)
-                kept_origin.append(int(belief.origin[i]))
-                if len(kept) == n:
-                    break
-    if len(kept) >= max(1, min_match_fraction * n):
-        post = ParticleBelief(kept, np.full(len(kept), 1.0 / len(kept)), np.asarray(kept_origin))
-        if len(kept) < n:
+                extra.append(s_next)
+                extra_origin.append(int(belief.origin[i]))
+    matched = len(kept) + len(extra)
+    if matched >= max(1, min_match_fraction * n):
+        # Pass-1 matches are a weighted posterior sample, pass-2 ones an unweighted one;
+        # each set gets mass in proportion to its size.
+        w1 = np.asarray(kept_w, dtype=float)
+        w1 = w1 / w1.sum() * len(kept) if len(kept) else w1
+        weights = np.concatenate([w1, np.ones(len(extra))])
+        post = ParticleBelief(
+            kept + extra, weights, np.asarray(kept_origin + extra_origin, dtype=np.int64)
+        )
+        if len(post) != n or post.ess() < resample_ess * n:
             post = post.resampled(rng, n)
-        return post, UpdateInfo("match", len(kept), draws, post.ess())
+        return post, UpdateInfo("match", matched, draws, post.ess())
     # Fallback: too few exact matches; weight the propagated particles by Z(o | s', a).
-    logw = np.array([pomdp.obs_loglik(o, s, a) for s in proposed], dtype=float)
-    post = _weighted(pomdp, proposed, np.asarray(proposed_origin), logw, o, a, rng, n, resample_ess)
-    method = "likelihood" if post[1] == "likelihood" else "reinvigorated"
-    return post[0], UpdateInfo(method, len(kept), draws, post[0].ess())
+    logw = np.log(np.maximum(belief.weights, 1e-300)) + np.array(
+        [pomdp.obs_loglik(o, s, a) for s in proposed], dtype=float
+    )
+    post, method = _weighted(
+        pomdp, proposed, np.asarray(proposed_origin), logw, o, a, rng, n, resample_ess
+    )
+    return post, UpdateInfo(method, matched, draws, post.ess())
 
 
 def _update_likelihood(

@@ -55,7 +55,7 @@ def _split(text: str) -> tuple[str, ...]:
 
 
 def _add_budget(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--sims", type=int, help="simulations per decision (default: solver's, 1000)")
+    p.add_argument("--sims", type=int, help="simulations per decision (default: solver's, 3000)")
     p.add_argument("--time", type=float, help="wall time per decision [s] (not reproducible)")
     p.add_argument(
         "--set",

@@ -44,11 +44,22 @@ def test_tigerclassic_exact_match_matches_bayes() -> None:
     assert abs(_p_left(belief) - 0.5) < 0.02
 
 
+def test_an_observation_every_particle_explains_leaves_the_belief_unchanged() -> None:
+    pomdp = make_domain("extendedtiger")
+    rng = np.random.default_rng(1)
+    belief = pomdp.initial_belief(rng, 500)
+    post, info = update_belief(pomdp, belief, LISTEN, HEAR_NOTHING, rng)
+    assert info.matched == 500 and info.draws == 500
+    assert [s[0] for s in post.states] == [s[0] for s in belief.states]
+    assert np.allclose(post.weights, belief.weights, rtol=1e-12)
+    assert np.array_equal(post.origin, belief.origin)
+
+
 def test_exact_match_falls_back_to_likelihood_weighting() -> None:
     pomdp = make_domain("tigerclassic")
     rng = np.random.default_rng(0)
     # Nearly all mass on "left": hearing "right" matches ~15% of draws; with one draw per
-    # wanted particle and 90% required, the exact-match pass gives up.
+    # wanted particle and 90% required, the exact-match passes give up.
     belief = ParticleBelief.from_states([0] * 999 + [1])
     post, info = update_belief(
         pomdp, belief, LISTEN, HEAR_RIGHT, rng, max_tries_per_particle=1, min_match_fraction=0.9

@@ -64,7 +64,9 @@ def test_gaussian_entropy_matches_the_analytic_value() -> None:
     rng = np.random.default_rng(2)
     x = rng.normal([0.0, 3.0], [2.0, 0.5], size=(20_000, 2))
     h = particle_entropy(list(x), np.ones(len(x)), x)
-    exact = 0.5 * math.log((2 * math.pi * math.e) ** 2 * (4.0 + MIN_VARIANCE) * (0.25 + MIN_VARIANCE))
+    exact = 0.5 * math.log(
+        (2 * math.pi * math.e) ** 2 * (4.0 + MIN_VARIANCE) * (0.25 + MIN_VARIANCE)
+    )
     assert h == pytest.approx(exact, abs=0.02)
 
 

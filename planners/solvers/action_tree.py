@@ -193,4 +193,3 @@ class ActionTree:
     def size(self) -> int:
         """Number of action nodes."""
         return len(self.a_n)
-

@@ -29,7 +29,7 @@ from planners.belief import ParticleBelief
 from planners.entropy import particle_entropy
 from planners.errors import check_positive_float
 from planners.solvers.base import SearchInfo
-from planners.solvers.belief_tree import BeliefTreeConfig, belief_tree_search
+from planners.solvers.belief_tree import BeliefTreeConfig, belief_tree_search, root_particles
 from planners.solvers.entropy_regularized import entropy_value
 
 
@@ -81,10 +81,9 @@ class ActiveLearningPlanner:
         h = particle_entropy(belief.states, belief.weights, pomdp.entropy_features(belief.states))
         threshold = cfg.entropy_threshold
         if h > threshold:
-            idx = belief.sample_indices(rng, cfg.particles)
-            states = [belief.states[i] for i in idx.tolist()]
+            states, weights = root_particles(pomdp, belief, cfg.particles, rng)
             result = belief_tree_search(
-                pomdp, cfg, states, np.ones(len(states)), rng,
+                pomdp, cfg, states, weights, rng,
                 node_value=self.value, beta=cfg.beta, reward_weight=0.0, c=cfg.beta,
                 terminal_bonus=lambda h_left: -cfg.beta * max(h_left - threshold, 0.0),
             )  # fmt: skip

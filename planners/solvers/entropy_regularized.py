@@ -20,7 +20,12 @@ import numpy as np
 from planners.belief import ParticleBelief
 from planners.entropy import particle_entropy
 from planners.solvers.base import SearchInfo
-from planners.solvers.belief_tree import BeliefTreeConfig, NodeValue, belief_tree_search
+from planners.solvers.belief_tree import (
+    BeliefTreeConfig,
+    NodeValue,
+    belief_tree_search,
+    root_particles,
+)
 
 
 def entropy_value(pomdp: Any) -> NodeValue:
@@ -55,10 +60,9 @@ class EntropyPlanner:
 
     def act(self, belief: ParticleBelief, rng: np.random.Generator) -> tuple[Hashable, SearchInfo]:
         cfg = self.config
-        idx = belief.sample_indices(rng, cfg.particles)
-        states = [belief.states[i] for i in idx.tolist()]
+        states, weights = root_particles(self.pomdp, belief, cfg.particles, rng)
         result = belief_tree_search(
-            self.pomdp, cfg, states, np.ones(len(states)), rng,
+            self.pomdp, cfg, states, weights, rng,
             node_value=self.value, beta=cfg.beta,
         )  # fmt: skip
         action = result.best if result.best is not None else self.pomdp.action_space().sample(rng)

