@@ -46,5 +46,5 @@ def particle_entropy(
     mean = w @ x
     d = x - mean
     cov = (d * w[:, None]).T @ d + MIN_VARIANCE * np.eye(x.shape[1])
-    sign, logdet = np.linalg.slogdet(2.0 * math.pi * math.e * cov)
+    _, logdet = np.linalg.slogdet(2.0 * math.pi * math.e * cov)
     return 0.5 * float(logdet)

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Hashable
+
 import numpy as np
 
 from planners.errors import ConfigError, check_positive_float

@@ -182,11 +182,10 @@ def belief_tree_search(
     c = c_default if c is None else c
     space = pomdp.action_space()
     widening = resolve_widening(config.widening, space, "hpw")
-    step, loglik = pomdp.step, pomdp.obs_loglik
+    step = pomdp.step
     discrete_obs = pomdp.discrete_observations
     k_o, al_o = config.k_obs, config.alpha_obs
     u = UniformStream(rng)
-    exp = math.exp
     tree = ActionTree(space, widening, config.k_action, config.alpha_action, c, rng, u)
     select, backup, a_action, a_n = tree.select, tree.update, tree.a_action, tree.a_n
     rollout_actions = list(space.discretized) if widening == "all" else None
