@@ -1,0 +1,200 @@
+"""The Fetch mobile manipulator: model files, joint names, and Pinocchio kinematics.
+
+The robot is described twice, from one source (see ``models/fetch/README.md``):
+
+* ``fetch.xml`` / ``scene.xml`` (MuJoCo): dynamics, actuators, the ``home`` keyframe,
+  the ``gripper`` site (the TCP, between the fingers) and the ``head_camera`` camera
+  and site;
+* ``fetch.urdf`` (Pinocchio, or any URDF tool): the same kinematic tree, with frames
+  ``gripper`` and ``head_camera`` at the MuJoCo sites.
+
+The two models order their joints differently (Pinocchio sorts the fingers ``l``
+before ``r``; its continuous base yaw takes two coordinates, cos and sin). Always map
+between them BY NAME: every function here takes ``{joint name: value}``.
+
+Units: prismatic joints [m], revolute joints [rad]; poses are 4x4 homogeneous
+transforms ``T_world_frame`` [m]; Jacobians are 6 x n, rows ``(v_x, v_y, v_z, w_x, w_y,
+w_z)`` of the frame origin's linear velocity [m/s] and the frame's angular velocity
+[rad/s], both in world axes, per unit joint velocity.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import numpy as np
+
+from planners.errors import ConfigError, UnknownNameError
+
+#: Folder of the Fetch description (MJCF, URDF, meshes, README with source and licence).
+FETCH_DIR: Path = Path(__file__).resolve().parents[2] / "models" / "fetch"
+#: The robot alone in MJCF (compiler angle=radian, meshdir=assets).
+FETCH_XML: Path = FETCH_DIR / "fetch.xml"
+#: The robot on a floor with a light (shadows off), including ``fetch.xml``.
+FETCH_SCENE_XML: Path = FETCH_DIR / "scene.xml"
+#: The same kinematics as URDF, with frames ``gripper`` and ``head_camera``.
+FETCH_URDF: Path = FETCH_DIR / "fetch.urdf"
+
+#: Planar base: world-frame translation x [m], y [m], then yaw about z [rad].
+BASE_JOINTS: tuple[str, str, str] = ("base_x_joint", "base_y_joint", "base_yaw_joint")
+#: Torso lift (prismatic, [0, 0.38615] m).
+TORSO_JOINT: str = "torso_lift_joint"
+#: The 7 arm joints, shoulder to wrist [rad].
+ARM_JOINTS: tuple[str, ...] = (
+    "shoulder_pan_joint",
+    "shoulder_lift_joint",
+    "upperarm_roll_joint",
+    "elbow_flex_joint",
+    "forearm_roll_joint",
+    "wrist_flex_joint",
+    "wrist_roll_joint",
+)
+#: The two fingers, each travelling [0, 0.05] m outwards from closed; in MuJoCo they are
+#: coupled (equality) and driven by one actuator ``gripper`` on their mean travel.
+GRIPPER_JOINTS: tuple[str, str] = ("r_gripper_finger_joint", "l_gripper_finger_joint")
+#: Head pan and tilt [rad] (tilt > 0 looks down).
+HEAD_JOINTS: tuple[str, str] = ("head_pan_joint", "head_tilt_joint")
+#: Every joint of the robot, in the order above.
+ALL_JOINTS: tuple[str, ...] = (
+    *BASE_JOINTS,
+    TORSO_JOINT,
+    *ARM_JOINTS,
+    *GRIPPER_JOINTS,
+    *HEAD_JOINTS,
+)
+
+#: MuJoCo site (and URDF frame) of the tool centre point, between the fingers.
+GRIPPER_SITE: str = "gripper"
+#: MuJoCo camera (and site, and URDF frame) of the head RGB-D camera; MuJoCo camera
+#: convention: looks along its -z axis, +x is image right, +y image up.
+HEAD_CAMERA: str = "head_camera"
+#: Name of the MuJoCo keyframe with the arm tucked and the gripper open.
+HOME_KEYFRAME: str = "home"
+#: MuJoCo actuator of each controlled joint (the fingers share ``gripper``).
+ACTUATORS: dict[str, str] = {
+    **{j: j.removesuffix("_joint") for j in (*BASE_JOINTS, TORSO_JOINT, *ARM_JOINTS)},
+    **{j: "gripper" for j in GRIPPER_JOINTS},
+    **{j: j.removesuffix("_joint") for j in HEAD_JOINTS},
+}
+
+
+class FetchKinematics:
+    """Forward kinematics and frame Jacobians of Fetch, computed by Pinocchio from URDF.
+
+    Args:
+        urdf: path of the URDF (default: ``models/fetch/fetch.urdf``).
+        tcp_frame: the frame :meth:`forward` returns (default: ``gripper``, the TCP).
+
+    Joints not given in a ``q_by_name`` mapping are at 0 (base at the world origin,
+    torso down, arm straight ahead, fingers closed, head level).
+
+    Raises:
+        ConfigError: the URDF is missing or cannot be parsed.
+        UnknownNameError: ``tcp_frame`` is not a frame of the URDF.
+    """
+
+    def __init__(self, urdf: str | Path = FETCH_URDF, tcp_frame: str = GRIPPER_SITE) -> None:
+        import pinocchio as pin
+
+        self._pin = pin
+        path = Path(urdf)
+        if not path.is_file():
+            raise ConfigError(f"Fetch URDF not found: {str(path)!r} (expected a .urdf file)")
+        try:
+            self.model = pin.buildModelFromUrdf(str(path))
+        except (RuntimeError, ValueError) as exc:
+            raise ConfigError(f"cannot parse the URDF {str(path)!r}: {exc}") from None
+        self.data = self.model.createData()
+        joints = self.model.joints
+        #: Joint names in Pinocchio's order (each joint has one velocity coordinate).
+        self.joint_names: tuple[str, ...] = tuple(self.model.names[1:])
+        self._idx_q = {n: joints[i].idx_q for i, n in enumerate(self.model.names) if i > 0}
+        self._nq = {n: joints[i].nq for i, n in enumerate(self.model.names) if i > 0}
+        self._idx_v = {n: joints[i].idx_v for i, n in enumerate(self.model.names) if i > 0}
+        if any(joints[i].nv != 1 for i in range(1, self.model.njoints)):
+            raise ConfigError(f"{str(path)!r}: every joint must have one degree of freedom")
+        self.frame_names: tuple[str, ...] = tuple(f.name for f in self.model.frames)
+        self.tcp_frame = tcp_frame
+        self._tcp_id = self._frame_id(tcp_frame)
+
+    # -- configuration -------------------------------------------------------------------
+
+    def joint_limits(self) -> dict[str, tuple[float, float]]:
+        """``{joint: (lower, upper)}`` from the URDF [m or rad]; continuous: (-inf, inf)."""
+        lo, hi = self.model.lowerPositionLimit, self.model.upperPositionLimit
+        out: dict[str, tuple[float, float]] = {}
+        for name in self.joint_names:
+            i = self._idx_q[name]
+            if self._nq[name] == 2:
+                out[name] = (-math.inf, math.inf)
+            else:
+                out[name] = (float(lo[i]), float(hi[i]))
+        return out
+
+    def configuration(self, q_by_name: Mapping[str, float]) -> np.ndarray:
+        """Pinocchio's configuration vector, shape (nq,), from joint values by name.
+
+        Raises:
+            UnknownNameError: a name is not a joint of the model (lists the valid ones).
+            ConfigError: a value is not a finite number.
+        """
+        q = self._pin.neutral(self.model)
+        for name, value in q_by_name.items():
+            if name not in self._idx_q:
+                raise UnknownNameError("Fetch joint", name, self.joint_names)
+            if isinstance(value, bool) or not isinstance(value, int | float | np.number):
+                raise ConfigError(f"joint {name!r} must be a number [m or rad], got {value!r}")
+            x = float(value)
+            if not math.isfinite(x):
+                raise ConfigError(f"joint {name!r} must be finite, got {value!r}")
+            i = self._idx_q[name]
+            if self._nq[name] == 2:  # continuous joint: (cos, sin)
+                q[i], q[i + 1] = math.cos(x), math.sin(x)
+            else:
+                q[i] = x
+        return q
+
+    # -- kinematics ----------------------------------------------------------------------
+
+    def forward(self, q_by_name: Mapping[str, float]) -> np.ndarray:
+        """``T_world_gripper``, shape (4, 4) [m]: the pose of the TCP frame in the world."""
+        return self.frame_pose(self.tcp_frame, q_by_name)
+
+    def frame_pose(self, frame: str, q_by_name: Mapping[str, float]) -> np.ndarray:
+        """``T_world_frame``, shape (4, 4) [m], of any URDF frame (link or site)."""
+        fid = self._frame_id(frame)
+        q = self.configuration(q_by_name)
+        self._pin.framesForwardKinematics(self.model, self.data, q)
+        return np.array(self.data.oMf[fid].homogeneous)
+
+    def jacobian(
+        self,
+        q_by_name: Mapping[str, float],
+        joints: Sequence[str] | None = None,
+        frame: str | None = None,
+    ) -> np.ndarray:
+        """Frame Jacobian, shape (6, len(joints)), of ``frame`` (default: the TCP).
+
+        Rows: linear velocity of the frame origin [m/s], then angular velocity [rad/s],
+        both in world axes (Pinocchio's ``LOCAL_WORLD_ALIGNED``). Column k is the
+        derivative with respect to ``joints[k]`` [m or rad] (default: all joints in
+        :attr:`joint_names` order).
+        """
+        pin = self._pin
+        names = self.joint_names if joints is None else tuple(joints)
+        for name in names:
+            if name not in self._idx_v:
+                raise UnknownNameError("Fetch joint", name, self.joint_names)
+        fid = self._tcp_id if frame is None else self._frame_id(frame)
+        q = self.configuration(q_by_name)
+        J = pin.computeFrameJacobian(
+            self.model, self.data, q, fid, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+        )
+        return np.array(J[:, [self._idx_v[n] for n in names]])
+
+    def _frame_id(self, frame: str) -> int:
+        if frame not in self.frame_names:
+            raise UnknownNameError("Fetch frame", frame, sorted(set(self.frame_names)))
+        return int(self.model.getFrameId(frame))
