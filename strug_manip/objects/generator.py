@@ -1,0 +1,777 @@
+"""Seeded procedural generator of PartNet-Mobility-style storage furniture.
+
+``generate_cabinet(seed)`` draws a cabinet: a carcass (a box open at the front) divided
+into a grid of cells, each cell holding one part: a **drawer** (prismatic joint), a
+**door** (revolute joint, hinge on the left, right, top or bottom edge of the cell), a
+fixed **panel**, or an open **shelf** compartment. Every random number comes from
+``np.random.default_rng(seed)``: the same seed gives the same cabinet, bit for bit.
+:func:`strug_manip.objects.partnet.write_partnet` writes it as ``mobility.urdf`` and
+``semantics.txt``.
+
+Object frame (all positions below, and every ``*_pos`` of the spec, are in it)
+-----------------------------------------------------------------------------
+Origin on the floor at the centre of the footprint; ``+x`` is the outward normal of the
+open front (the front plane is ``x = depth / 2``), ``+z`` is up, ``+y = z × x``. A person
+standing in front of the cabinet looks along ``-x``, so *their* left is ``-y``; "left"
+and "right" (hinges, columns) are always meant from that person's point of view.
+Rows are counted from the top (row 0 is the top row), columns from the viewer's left.
+Every part link frame is parallel to the object frame, so a joint axis has the same
+coordinates in the link, base and object frames.
+
+Documented ranges (all drawn uniformly unless stated)
+-----------------------------------------------------
+Carcass:
+
+- width ``W`` in [0.40, 1.00] m (along y), depth ``D`` in [0.35, 0.55] m (along x),
+  height ``H`` in [0.40, 1.20] m;
+- wall, top, bottom and divider thickness ``t`` in [0.015, 0.020] m, back panel
+  thickness in [0.004, 0.008] m;
+- plinth (bottom panel raised on a recessed kick board): none with probability 0.5,
+  else a height in [0.04, 0.10] m.
+
+Grid: cell widths in [0.20, 0.60] m and cell heights in [0.12, 0.45] m; the number of
+columns (1..3) and rows (1..4) is drawn uniformly among the counts that fit those
+bounds, then the widths/heights are split with Dirichlet(4, ..., 4) proportions, shrunk
+toward equal sizes just enough to respect the bounds.
+
+Part kinds (default, all allowed): drawer 0.35, door 0.35, shelf 0.15, panel 0.15
+(renormalised over the allowed ``kinds``). If movable kinds are allowed but none was
+drawn, one random cell is redrawn among the movable kinds.
+
+Fronts (drawer fronts, doors, panels) are inset in the cell opening, flush with the
+front plane, with a gap in [0.002, 0.004] m all round, thickness in [0.015, 0.022] m.
+
+Drawer: front panel plus an open box (bottom, two sides, back) of board thickness in
+[0.008, 0.012] m, 6 mm side clearance, 5 mm above the cell floor; box height = [0.60,
+0.85] × the front height, box depth = [0.80, 0.95] × the free cell depth. Joint:
+prismatic along ``+x`` (the outward normal), origin on the front plane at the cell
+centre, limits ``[0, u]`` with ``u`` = [0.70, 0.90] × the box depth [m]; damping in
+[2, 10] N s/m, Coulomb friction in [0.5, 3.0] N.
+
+Door: one panel; hinge side left 0.35, right 0.35, top 0.15, bottom 0.15. Joint:
+revolute about the hinge edge on the front plane (top hinges: on the panel's back face,
+so a hanging flap rests shut rather than sagging open), axis ``e × n`` (``e`` the unit vector
+from the hinge to the free edge, ``n = +x``) so that a positive angle opens outward;
+limits ``[0, u]`` with ``u`` in [1.57, 2.10] rad (side hinges) or [1.20, 1.57] rad (top
+and bottom hinges); damping in [0.05, 0.50] N m s/rad, friction in [0.05, 0.30] N m.
+Bottom-hinged (drop-down) doors get a friction stay instead: friction = [1.3, 2.0] ×
+the door's gravity torque when horizontal, so they stay shut under gravity.
+
+Panel: a fixed front board. Shelf: an open cell whose link is an 8 mm shelf board
+lying on the cell floor (the surface an object is placed on).
+
+Handles (one style per cabinet, among the allowed ``handles``; bar 0.5, knob 0.3,
+none 0.2), on drawers and doors only:
+
+- bar: a cylinder of radius [0.005, 0.008] m and length [0.08, 0.20] m (at most 0.6 ×
+  the front extent), its axis [0.025, 0.040] m in front of the front face, on two posts;
+- knob: a cylinder along ``x`` of radius [0.010, 0.018] m, length [0.020, 0.035] m;
+- drawers: centred on the front, bar horizontal; doors: on the free edge's side,
+  [0.03, 0.06] m in from it, centred along it, bar parallel to the hinge axis.
+
+``handle_pos`` is the grasp point with the part closed: the bar's centre, the knob's
+axis 1 cm behind its tip, or (no handle) the point on the front face where the
+handle would be.
+
+Mass: boards have density ``rho`` in [450, 700] kg/m^3 (pine to MDF), handles 2700
+kg/m^3 (aluminium); ``rho`` is then rescaled if needed so the total mass lies in
+[10, 40] kg (hollow-core boards for the large cabinets, solid wood for the small).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+
+from planners.errors import ConfigError, UnknownNameError
+
+PartKind = Literal["drawer", "door", "shelf", "panel"]
+HandleKind = Literal["bar", "knob", "none"]
+HingeSide = Literal["left", "right", "top", "bottom"]
+
+PART_KINDS: tuple[str, ...] = ("drawer", "door", "shelf", "panel")
+HANDLE_KINDS: tuple[str, ...] = ("bar", "knob", "none")
+MOVABLE_KINDS: tuple[str, ...] = ("drawer", "door")
+
+KIND_WEIGHTS: dict[str, float] = {"drawer": 0.35, "door": 0.35, "shelf": 0.15, "panel": 0.15}
+HINGE_WEIGHTS: dict[str, float] = {"left": 0.35, "right": 0.35, "top": 0.15, "bottom": 0.15}
+HANDLE_WEIGHTS: dict[str, float] = {"bar": 0.5, "knob": 0.3, "none": 0.2}
+
+# (PartNet-Mobility joint word, semantic label) per kind, as written to semantics.txt.
+SEMANTICS: dict[str, tuple[str, str]] = {
+    "body": ("heavy", "furniture_body"),
+    "drawer": ("slider", "drawer"),
+    "door": ("hinge", "door"),
+    "shelf": ("static", "shelf"),
+    "panel": ("static", "panel"),
+}
+
+# Documented ranges [m], [kg/m^3], [N s/m], [N], [N m s/rad], [N m], [rad].
+WIDTH_RANGE = (0.40, 1.00)
+DEPTH_RANGE = (0.35, 0.55)
+HEIGHT_RANGE = (0.40, 1.20)
+WALL_RANGE = (0.015, 0.020)
+BACK_RANGE = (0.004, 0.008)
+PLINTH_RANGE = (0.04, 0.10)
+PLINTH_PROB = 0.5
+CELL_WIDTH_RANGE = (0.20, 0.60)
+CELL_HEIGHT_RANGE = (0.12, 0.45)
+MAX_COLS = 3
+MAX_ROWS = 4
+GAP_RANGE = (0.002, 0.004)
+FRONT_RANGE = (0.015, 0.022)
+DRAWER_BOARD_RANGE = (0.008, 0.012)
+DRAWER_SIDE_CLEARANCE = 0.006
+DRAWER_FLOOR_CLEARANCE = 0.005
+DRAWER_HEIGHT_FRAC = (0.60, 0.85)
+DRAWER_DEPTH_FRAC = (0.80, 0.95)
+DRAWER_TRAVEL_FRAC = (0.70, 0.90)
+DRAWER_DAMPING = (2.0, 10.0)
+DRAWER_FRICTION = (0.5, 3.0)
+DOOR_SIDE_LIMIT = (1.57, 2.10)
+DOOR_FLAP_LIMIT = (1.20, 1.57)
+DOOR_DAMPING = (0.05, 0.50)
+DOOR_FRICTION = (0.05, 0.30)
+DROP_DOOR_HOLD = (1.3, 2.0)
+SHELF_BOARD = 0.008
+BAR_RADIUS = (0.005, 0.008)
+BAR_LENGTH = (0.08, 0.20)
+BAR_STANDOFF = (0.025, 0.040)
+KNOB_RADIUS = (0.010, 0.018)
+KNOB_LENGTH = (0.020, 0.035)
+DOOR_HANDLE_INSET = (0.03, 0.06)
+WOOD_DENSITY = (450.0, 700.0)
+METAL_DENSITY = 2700.0
+TOTAL_MASS = (10.0, 40.0)
+JOINT_EFFORT = 100.0  # URDF <limit effort>: [N] or [N m], informative only
+JOINT_VELOCITY = 2.0  # URDF <limit velocity>: [m/s] or [rad/s], informative only
+GRAVITY = 9.81  # [m/s^2]
+
+_WOODS: tuple[tuple[float, float, float, float], ...] = (
+    (0.76, 0.60, 0.42, 1.0),  # oak
+    (0.87, 0.72, 0.53, 1.0),  # birch
+    (0.55, 0.35, 0.20, 1.0),  # walnut
+    (0.93, 0.93, 0.90, 1.0),  # white laminate
+    (0.45, 0.47, 0.50, 1.0),  # grey laminate
+    (0.20, 0.20, 0.22, 1.0),  # black laminate
+)
+_METAL = (0.72, 0.72, 0.75, 1.0)
+
+
+@dataclass(frozen=True)
+class Geom:
+    """A box or cylinder in a link frame.
+
+    Attributes:
+        name: unique within the link; handle geometry is named ``handle*``.
+        shape: ``"box"`` or ``"cylinder"``.
+        pos: centre in the link frame, shape (3,) [m].
+        size: box full extents (3,) [m], or cylinder ``(radius, length)`` (2,) [m].
+        axis: cylinder axis, ``"x"``, ``"y"`` or ``"z"`` (ignored for boxes).
+        material: ``"wood"`` or ``"metal"`` (selects the density).
+        rgba: colour, shape (4,).
+    """
+
+    name: str
+    shape: Literal["box", "cylinder"]
+    pos: tuple[float, float, float]
+    size: tuple[float, ...]
+    axis: Literal["x", "y", "z"] = "z"
+    material: Literal["wood", "metal"] = "wood"
+    rgba: tuple[float, float, float, float] = (0.8, 0.8, 0.8, 1.0)
+
+    def volume(self) -> float:
+        """Volume [m^3]."""
+        if self.shape == "box":
+            return float(np.prod(self.size))
+        r, length = self.size
+        return math.pi * r * r * length
+
+    def inertia_about_center(self, mass: float) -> np.ndarray:
+        """Inertia tensor about the geom centre in the link frame, shape (3, 3) [kg m^2]."""
+        if self.shape == "box":
+            a, b, c = self.size
+            return mass / 12.0 * np.diag([b * b + c * c, a * a + c * c, a * a + b * b])
+        r, length = self.size
+        perp = mass * (3 * r * r + length * length) / 12.0
+        diag = [perp, perp, perp]
+        diag["xyz".index(self.axis)] = 0.5 * mass * r * r
+        return np.diag(diag)
+
+
+@dataclass(frozen=True)
+class Inertial:
+    """Mass properties of a link, in the link frame.
+
+    Attributes:
+        mass: [kg].
+        com: centre of mass, shape (3,) [m].
+        inertia: inertia tensor about the centre of mass, shape (3, 3) [kg m^2].
+    """
+
+    mass: float
+    com: np.ndarray
+    inertia: np.ndarray
+
+
+def _inertial(geoms: Sequence[Geom], densities: dict[str, float]) -> Inertial:
+    """Combine the geoms' masses and inertias (parallel-axis theorem)."""
+    masses = np.array([g.volume() * densities[g.material] for g in geoms])
+    centers = np.array([g.pos for g in geoms], dtype=float)
+    total = float(masses.sum())
+    com = (masses[:, None] * centers).sum(axis=0) / total
+    inertia = np.zeros((3, 3))
+    for g, m, c in zip(geoms, masses, centers, strict=True):
+        d = c - com
+        inertia += g.inertia_about_center(float(m)) + m * (d @ d * np.eye(3) - np.outer(d, d))
+    return Inertial(total, com, inertia)
+
+
+@dataclass(frozen=True)
+class PartSpec:
+    """One cell's part: its link, its joint to the carcass and where to grasp it.
+
+    Positions and axes are in the object frame (see the module docstring) with the part
+    closed (joint position 0); link frames are parallel to the object frame.
+
+    Attributes:
+        link: URDF link name (``link_1``, ...); the carcass is ``link_0``.
+        joint: URDF joint name (``joint_1``, ...) joining ``link`` to ``link_0``.
+        kind: ``drawer``, ``door``, ``shelf`` or ``panel``.
+        semantic: the semantics.txt label (``drawer``, ``door``, ``shelf``, ``panel``).
+        row, col: grid cell (row 0 at the top, col 0 at the viewer's left).
+        cell_center: centre of the cell opening on the front plane, (3,) [m].
+        cell_size: opening (width along y, height along z), (2,) [m].
+        joint_type: ``prismatic``, ``revolute`` or ``fixed``.
+        axis: unit joint axis, (3,); zeros for fixed parts.
+        origin: joint origin = link frame origin, (3,) [m].
+        lower, upper: joint limits [m] (prismatic) or [rad] (revolute); 0 for fixed.
+        damping: [N s/m] or [N m s/rad]; friction: [N] or [N m].
+        hinge: door hinge side, else ``None``.
+        handle: ``bar``, ``knob`` or ``none`` (always ``none`` for shelves and panels).
+        handle_pos: grasp point, (3,) [m], or ``None`` for shelves and panels.
+        handle_axis: unit bar direction (3,) (for knobs: ``+x``), or ``None``.
+        interior_center, interior_size: the free box where an object can be put (the
+            drawer's inside, the cell behind a door, the space above a shelf board),
+            centre (3,) [m] and full extents (3,) [m]; moves with the part for drawers.
+        geoms: the link's geometry in the link frame.
+        inertial: the link's mass properties.
+    """
+
+    link: str
+    joint: str
+    kind: str
+    semantic: str
+    row: int
+    col: int
+    cell_center: np.ndarray
+    cell_size: np.ndarray
+    joint_type: str
+    axis: np.ndarray
+    origin: np.ndarray
+    lower: float
+    upper: float
+    damping: float
+    friction: float
+    hinge: str | None
+    handle: str
+    handle_pos: np.ndarray | None
+    handle_axis: np.ndarray | None
+    interior_center: np.ndarray | None
+    interior_size: np.ndarray | None
+    geoms: tuple[Geom, ...]
+    inertial: Inertial
+
+    @property
+    def movable(self) -> bool:
+        """True for drawers and doors."""
+        return self.joint_type != "fixed"
+
+    def point_at(self, p: np.ndarray, q: float) -> np.ndarray:
+        """Where a point of the part (object frame, part closed) is at joint position ``q``.
+
+        Args:
+            p: point, shape (3,) [m].
+            q: joint position [m] or [rad].
+
+        Returns:
+            The moved point, shape (3,) [m], object frame.
+        """
+        p = np.asarray(p, dtype=float)
+        if self.joint_type == "prismatic":
+            return p + q * self.axis
+        if self.joint_type == "revolute":
+            return self.origin + _axis_angle(self.axis, q) @ (p - self.origin)
+        return p.copy()
+
+    def handle_at(self, q: float, T_world_object: np.ndarray | None = None) -> np.ndarray | None:
+        """Grasp point at joint position ``q``, in the world frame if ``T_world_object``.
+
+        Args:
+            q: joint position [m] or [rad].
+            T_world_object: pose of the object frame, shape (4, 4); identity if None.
+
+        Returns:
+            Shape (3,) [m], or ``None`` for parts without a grasp point.
+        """
+        if self.handle_pos is None:
+            return None
+        p = self.point_at(self.handle_pos, q)
+        if T_world_object is None:
+            return p
+        return T_world_object[:3, :3] @ p + T_world_object[:3, 3]
+
+
+@dataclass(frozen=True)
+class CabinetSpec:
+    """A generated cabinet: carcass dimensions, grid and parts (object frame, [m]).
+
+    Attributes:
+        seed: generator seed.
+        kinds: the part kinds that were allowed.
+        width, depth, height: outer dimensions along y, x, z [m].
+        wall: carcass board thickness [m]; back: back panel thickness [m].
+        plinth: height of the raised bottom (0 if none) [m].
+        rows, cols: grid size.
+        row_heights: cell heights, top row first, shape (rows,) [m].
+        col_widths: cell widths, viewer's left first, shape (cols,) [m].
+        body_geoms: the carcass geometry (``link_0``, frame = object frame).
+        body_inertial: the carcass mass properties.
+        parts: one per cell, row-major from the top-left.
+        colors: ``{"body": rgba, "front": rgba, "handle": rgba}``.
+    """
+
+    seed: int
+    kinds: tuple[str, ...]
+    width: float
+    depth: float
+    height: float
+    wall: float
+    back: float
+    plinth: float
+    rows: int
+    cols: int
+    row_heights: np.ndarray
+    col_widths: np.ndarray
+    body_geoms: tuple[Geom, ...]
+    body_inertial: Inertial
+    parts: tuple[PartSpec, ...]
+    colors: dict[str, tuple[float, float, float, float]] = field(default_factory=dict)
+
+    @property
+    def name(self) -> str:
+        """A file-system friendly name, e.g. ``cabinet_0042``."""
+        return f"cabinet_{self.seed:04d}"
+
+    @property
+    def mass(self) -> float:
+        """Total mass [kg]."""
+        return self.body_inertial.mass + sum(p.inertial.mass for p in self.parts)
+
+    @property
+    def movable_parts(self) -> tuple[PartSpec, ...]:
+        """Drawers and doors."""
+        return tuple(p for p in self.parts if p.movable)
+
+    def part(self, link: str) -> PartSpec:
+        """The part whose link is named ``link``."""
+        for p in self.parts:
+            if p.link == link:
+                return p
+        raise UnknownNameError("part link", link, [p.link for p in self.parts])
+
+
+def _axis_angle(axis: np.ndarray, angle: float) -> np.ndarray:
+    """Rotation matrix of ``angle`` [rad] about the unit ``axis`` (3,), shape (3, 3)."""
+    x, y, z = axis
+    c, s = math.cos(angle), math.sin(angle)
+    K = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+    return np.eye(3) + s * K + (1 - c) * K @ K
+
+
+def _uniform(rng: np.random.Generator, bounds: tuple[float, float]) -> float:
+    return float(rng.uniform(bounds[0], bounds[1]))
+
+
+def _choice(rng: np.random.Generator, weights: dict[str, float], allowed: Sequence[str]) -> str:
+    names = [k for k in weights if k in allowed]
+    p = np.array([weights[k] for k in names])
+    return names[int(rng.choice(len(names), p=p / p.sum()))]
+
+
+def _split(
+    rng: np.random.Generator, total: float, n: int, bounds: tuple[float, float]
+) -> np.ndarray:
+    """Split ``total`` into ``n`` sizes within ``bounds`` (Dirichlet(4), shrunk to fit)."""
+    lo, hi = bounds
+    mean = total / n
+    raw = total * rng.dirichlet(np.full(n, 4.0))
+    dev = raw - mean
+    lam = 1.0
+    for d in dev:
+        if d > 0 and mean + d > hi:
+            lam = min(lam, (hi - mean) / d)
+        elif d < 0 and mean + d < lo:
+            lam = min(lam, (mean - lo) / -d)
+    return mean + max(lam, 0.0) * dev
+
+
+def _count(
+    rng: np.random.Generator, span: float, t: float, bounds: tuple[float, float], cap: int
+) -> int:
+    """Number of cells (separated by boards ``t``) whose size can lie within ``bounds``."""
+    lo, hi = bounds
+    n_min = max(1, math.ceil((span + t) / (hi + t) - 1e-9))
+    n_max = max(n_min, min(cap, math.floor((span + t) / (lo + t) + 1e-9)))
+    return int(rng.integers(n_min, n_max + 1))
+
+
+def _box(name: str, lo: Sequence[float], hi: Sequence[float], rgba, material="wood") -> Geom:
+    lo_a, hi_a = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
+    center = tuple(float(v) for v in 0.5 * (lo_a + hi_a))
+    size = tuple(float(v) for v in hi_a - lo_a)
+    return Geom(name, "box", center, size, material=material, rgba=rgba)
+
+
+def _handle_geoms(
+    kind: str,
+    center: np.ndarray,
+    bar_dir: str,
+    params: dict[str, float],
+    max_len: float,
+    rgba: tuple[float, float, float, float],
+) -> tuple[list[Geom], np.ndarray]:
+    """Handle geometry on the front face through ``center`` (link frame, the face at
+    ``x = center[0]``), and its grasp point, (3,) [m]."""
+    x0, y, z = float(center[0]), float(center[1]), float(center[2])
+    if kind == "bar":
+        r, s = params["bar_radius"], params["bar_standoff"]
+        length = min(params["bar_length"], max_len)
+        geoms = [
+            Geom("handle_bar", "cylinder", (x0 + s, y, z), (r, length), bar_dir, "metal", rgba),
+        ]
+        k = "xyz".index(bar_dir)
+        for i, sign in enumerate((-1.0, 1.0)):
+            p = np.array([x0 + 0.5 * s, y, z])
+            p[k] += sign * (0.5 * length - 0.01)
+            geoms.append(
+                Geom(f"handle_post_{i}", "cylinder", tuple(p), (0.8 * r, s), "x", "metal", rgba)
+            )
+        return geoms, np.array([x0 + s, y, z])
+    if kind == "knob":
+        r, length = params["knob_radius"], params["knob_length"]
+        knob = Geom(
+            "handle_knob", "cylinder", (x0 + 0.5 * length, y, z), (r, length), "x", "metal", rgba
+        )
+        return [knob], np.array([x0 + max(length - 0.01, 0.5 * length), y, z])
+    return [], np.array([x0, y, z])
+
+
+def generate_cabinet(
+    seed: int,
+    *,
+    kinds: Sequence[str] = PART_KINDS,
+    handles: Sequence[str] = HANDLE_KINDS,
+) -> CabinetSpec:
+    """Draw one storage cabinet from ``np.random.default_rng(seed)``.
+
+    Args:
+        seed: integer >= 0; the same seed (and options) gives the same cabinet.
+        kinds: part kinds allowed in the cells, a subset of ``("drawer", "door",
+            "shelf", "panel")``: ``("drawer",)`` for OpenDrawer, ``("door",)`` for
+            OpenDoor, ``("shelf",)`` for Shelf.
+        handles: handle styles allowed, a subset of ``("bar", "knob", "none")``.
+
+    Returns:
+        The :class:`CabinetSpec` (ranges in the module docstring).
+
+    Raises:
+        ConfigError: a negative or non-integer seed, or an empty ``kinds``/``handles``.
+        UnknownNameError: an unknown part kind or handle style.
+    """
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+        raise ConfigError(f"seed must be an integer >= 0, got {seed!r}")
+    kinds = _check_names("part kind", kinds, PART_KINDS)
+    handles = _check_names("handle style", handles, HANDLE_KINDS)
+    rng = np.random.default_rng(int(seed))
+
+    # --- carcass --------------------------------------------------------------------
+    W, D, H = _uniform(rng, WIDTH_RANGE), _uniform(rng, DEPTH_RANGE), _uniform(rng, HEIGHT_RANGE)
+    t, tb = _uniform(rng, WALL_RANGE), _uniform(rng, BACK_RANGE)
+    plinth = _uniform(rng, PLINTH_RANGE) if rng.random() < PLINTH_PROB else 0.0
+    W_in, H_in = W - 2 * t, H - plinth - 2 * t
+    cols = _count(rng, W_in, t, CELL_WIDTH_RANGE, MAX_COLS)
+    rows = _count(rng, H_in, t, CELL_HEIGHT_RANGE, MAX_ROWS)
+    col_widths = _split(rng, W_in - (cols - 1) * t, cols, CELL_WIDTH_RANGE)
+    row_heights = _split(rng, H_in - (rows - 1) * t, rows, CELL_HEIGHT_RANGE)
+    palette = rng.permutation(len(_WOODS))
+    body_rgba = _WOODS[int(palette[0])]
+    front_rgba = body_rgba if rng.random() < 0.5 else _WOODS[int(palette[1])]
+    colors = {"body": body_rgba, "front": front_rgba, "handle": _METAL}
+
+    xf, xb = 0.5 * D, -0.5 * D + tb  # front plane, inner face of the back panel
+    y_lo, y_hi = -0.5 * W + t, 0.5 * W - t
+    z_bot, z_top = plinth + t, H - t  # inner floor and ceiling of the carcass
+    body: list[Geom] = [
+        _box("side_left", (-0.5 * D, -0.5 * W, 0.0), (xf, y_lo, H), body_rgba),
+        _box("side_right", (-0.5 * D, y_hi, 0.0), (xf, 0.5 * W, H), body_rgba),
+        _box("top", (xb, y_lo, z_top), (xf, y_hi, H), body_rgba),
+        _box("bottom", (xb, y_lo, plinth), (xf, y_hi, z_bot), body_rgba),
+        _box("back", (-0.5 * D, y_lo, plinth), (xb, y_hi, z_top), body_rgba),
+    ]
+    if plinth > 0:
+        body.append(_box("kick", (xf - 0.03 - t, y_lo, 0.0), (xf - 0.03, y_hi, plinth), body_rgba))
+    # Cell boundaries: rows from the top, columns from the viewer's left (-y).
+    z_edges, z = [], z_top
+    for h in row_heights:
+        z_edges.append((z - h, z))
+        z -= h + t
+    y_edges, y = [], y_lo
+    for w in col_widths:
+        y_edges.append((y, y + w))
+        y += w + t
+    for i in range(rows - 1):
+        z1 = z_edges[i][0]
+        body.append(_box(f"shelf_divider_{i}", (xb, y_lo, z1 - t), (xf, y_hi, z1), body_rgba))
+    for i, (z0, z1) in enumerate(z_edges):
+        for j in range(cols - 1):
+            y1 = y_edges[j][1]
+            body.append(_box(f"divider_{i}_{j}", (xb, y1, z0), (xf, y1 + t, z1), body_rgba))
+
+    # --- cells ----------------------------------------------------------------------
+    n_cells = rows * cols
+    cell_kinds = [_choice(rng, KIND_WEIGHTS, kinds) for _ in range(n_cells)]
+    movable_allowed = [k for k in kinds if k in MOVABLE_KINDS]
+    if movable_allowed and not any(k in MOVABLE_KINDS for k in cell_kinds):
+        cell_kinds[int(rng.integers(n_cells))] = _choice(rng, KIND_WEIGHTS, movable_allowed)
+    style = _choice(rng, HANDLE_WEIGHTS, handles)
+    gap, tf = _uniform(rng, GAP_RANGE), _uniform(rng, FRONT_RANGE)
+    handle_params = {
+        "bar_radius": _uniform(rng, BAR_RADIUS),
+        "bar_length": _uniform(rng, BAR_LENGTH),
+        "bar_standoff": _uniform(rng, BAR_STANDOFF),
+        "knob_radius": _uniform(rng, KNOB_RADIUS),
+        "knob_length": _uniform(rng, KNOB_LENGTH),
+    }
+    rho = _uniform(rng, WOOD_DENSITY)
+
+    drafts: list[dict] = []
+    for idx in range(n_cells):
+        i, j = divmod(idx, cols)
+        (z0, z1), (y0, y1) = z_edges[i], y_edges[j]
+        draft = _draft_part(
+            rng, cell_kinds[idx], (y0, y1), (z0, z1), xf, xb, gap, tf, style, handle_params, colors
+        )
+        draft.update(row=i, col=j, link=f"link_{idx + 1}", joint=f"joint_{idx + 1}")
+        drafts.append(draft)
+
+    # --- masses: wood density rescaled so the total lies in TOTAL_MASS ----------------
+    all_geoms = body + [g for d in drafts for g in d["geoms"]]
+    wood_v = sum(g.volume() for g in all_geoms if g.material == "wood")
+    metal_m = sum(g.volume() for g in all_geoms if g.material == "metal") * METAL_DENSITY
+    total = rho * wood_v + metal_m
+    target = min(max(total, TOTAL_MASS[0]), TOTAL_MASS[1])
+    rho = (target - metal_m) / wood_v
+    densities = {"wood": rho, "metal": METAL_DENSITY}
+
+    parts = []
+    for d in drafts:
+        inertial = _inertial(d["geoms"], densities)
+        if d["kind"] == "door" and d["hinge"] == "bottom":
+            # Friction stay: hold the drop-down door against gravity when horizontal.
+            lever = abs(float(inertial.com[2]))
+            d["friction"] = _uniform(rng, DROP_DOOR_HOLD) * inertial.mass * GRAVITY * lever
+        parts.append(_finish_part(d, inertial))
+    return CabinetSpec(
+        seed=int(seed),
+        kinds=kinds,
+        width=W,
+        depth=D,
+        height=H,
+        wall=t,
+        back=tb,
+        plinth=plinth,
+        rows=rows,
+        cols=cols,
+        row_heights=np.asarray(row_heights),
+        col_widths=np.asarray(col_widths),
+        body_geoms=tuple(body),
+        body_inertial=_inertial(body, densities),
+        parts=tuple(parts),
+        colors=colors,
+    )
+
+
+def _check_names(what: str, names: Sequence[str], valid: tuple[str, ...]) -> tuple[str, ...]:
+    if isinstance(names, str):
+        names = tuple(n for n in names.split(",") if n)
+    names = tuple(dict.fromkeys(str(n).strip().lower() for n in names))
+    if not names:
+        raise ConfigError(f"at least one {what} is needed; choose from {', '.join(valid)}")
+    for n in names:
+        if n not in valid:
+            raise UnknownNameError(what, n, valid)
+    return names
+
+
+def _draft_part(
+    rng: np.random.Generator,
+    kind: str,
+    ys: tuple[float, float],
+    zs: tuple[float, float],
+    xf: float,
+    xb: float,
+    gap: float,
+    tf: float,
+    style: str,
+    hp: dict[str, float],
+    colors: dict[str, tuple[float, float, float, float]],
+) -> dict:
+    """Geometry (link frame), joint and grasp point of one cell's part."""
+    (y0, y1), (z0, z1) = ys, zs
+    w, h, d = y1 - y0, z1 - z0, xf - xb
+    yc, zc = 0.5 * (y0 + y1), 0.5 * (z0 + z1)
+    cell_center = np.array([xf, yc, zc])
+    fw, fh = w - 2 * gap, h - 2 * gap  # front panel extents
+    front, metal = colors["front"], colors["handle"]
+    out: dict = {
+        "kind": kind,
+        "cell_center": cell_center,
+        "cell_size": np.array([w, h]),
+        "hinge": None,
+        "handle": "none",
+        "handle_pos": None,
+        "handle_axis": None,
+        "damping": 0.0,
+        "friction": 0.0,
+        "lower": 0.0,
+        "upper": 0.0,
+        "axis": np.zeros(3),
+    }
+    if kind == "drawer":
+        tb = _uniform(rng, DRAWER_BOARD_RANGE)
+        bw = w - 2 * DRAWER_SIDE_CLEARANCE
+        bh = _uniform(rng, DRAWER_HEIGHT_FRAC) * fh
+        bd = _uniform(rng, DRAWER_DEPTH_FRAC) * (d - tf - 0.01)
+        zb = -0.5 * h + DRAWER_FLOOR_CLEARANCE  # box bottom, link frame
+        xr = -tf - bd  # box rear
+        geoms = [
+            _box("front", (-tf, -0.5 * fw, -0.5 * fh), (0.0, 0.5 * fw, 0.5 * fh), front),
+            _box("bottom", (xr, -0.5 * bw, zb), (-tf, 0.5 * bw, zb + tb), front),
+            _box("side_left", (xr, -0.5 * bw, zb + tb), (-tf, -0.5 * bw + tb, zb + bh), front),
+            _box("side_right", (xr, 0.5 * bw - tb, zb + tb), (-tf, 0.5 * bw, zb + bh), front),
+            _box("back", (xr, -0.5 * bw + tb, zb + tb), (xr + tb, 0.5 * bw - tb, zb + bh), front),
+        ]
+        hg, hpos = _handle_geoms(style, np.zeros(3), "y", hp, 0.6 * fw, metal)
+        inner = np.array([bd - tb, bw - 2 * tb, bh - tb])
+        out.update(
+            joint_type="prismatic",
+            origin=cell_center,
+            axis=np.array([1.0, 0.0, 0.0]),
+            upper=_uniform(rng, DRAWER_TRAVEL_FRAC) * bd,
+            damping=_uniform(rng, DRAWER_DAMPING),
+            friction=_uniform(rng, DRAWER_FRICTION),
+            handle=style,
+            handle_pos=cell_center + hpos,
+            handle_axis=np.array([0.0, 1.0, 0.0]) if style == "bar" else np.array([1.0, 0, 0]),
+            interior_center=cell_center
+            + np.array([xr + tb + 0.5 * inner[0], 0.0, zb + tb + 0.5 * inner[2]]),
+            interior_size=inner,
+            geoms=tuple(geoms + hg),
+        )
+        return out
+    if kind == "door":
+        hinge = _choice(rng, HINGE_WEIGHTS, tuple(HINGE_WEIGHTS))
+        # e: unit vector from the hinge line to the free edge; origin: hinge point.
+        e, origin = {
+            "left": (np.array([0.0, 1.0, 0.0]), np.array([xf, y0 + gap, zc])),
+            "right": (np.array([0.0, -1.0, 0.0]), np.array([xf, y1 - gap, zc])),
+            "bottom": (np.array([0.0, 0.0, 1.0]), np.array([xf, yc, z0 + gap])),
+            # A top hinge sits on the panel's back face, so the hanging flap rests shut.
+            "top": (np.array([0.0, 0.0, -1.0]), np.array([xf - tf, yc, z1 - gap])),
+        }[hinge]
+        axis = np.cross(e, np.array([1.0, 0.0, 0.0]))
+        c = cell_center - origin  # panel centre, link frame
+        panel = _box(
+            "panel",
+            (c[0] - tf, c[1] - 0.5 * fw, c[2] - 0.5 * fh),
+            (c[0], c[1] + 0.5 * fw, c[2] + 0.5 * fh),
+            front,
+        )
+        span = fw if hinge in ("left", "right") else fh  # hinge -> free edge
+        along = fh if hinge in ("left", "right") else fw  # parallel to the hinge
+        inset = min(_uniform(rng, DOOR_HANDLE_INSET), 0.25 * span)
+        hcenter = c + e * (0.5 * span - inset)
+        bar_dir = "z" if hinge in ("left", "right") else "y"
+        hg, hpos = _handle_geoms(style, hcenter, bar_dir, hp, 0.6 * along, metal)
+        side = hinge in ("left", "right")
+        limit = DOOR_SIDE_LIMIT if side else DOOR_FLAP_LIMIT
+        bar_axis = np.array([0.0, 0.0, 1.0]) if side else np.array([0.0, 1.0, 0.0])
+        out.update(
+            joint_type="revolute",
+            origin=origin,
+            axis=axis,
+            hinge=hinge,
+            upper=_uniform(rng, limit),
+            damping=_uniform(rng, DOOR_DAMPING),
+            friction=_uniform(rng, DOOR_FRICTION),
+            handle=style,
+            handle_pos=origin + hpos,
+            handle_axis=bar_axis if style == "bar" else np.array([1.0, 0.0, 0.0]),
+            interior_center=np.array([0.5 * (xb + xf - tf), yc, zc]),
+            interior_size=np.array([d - tf, w, h]),
+            geoms=(panel, *hg),
+        )
+        return out
+    if kind == "panel":
+        geoms = (_box("panel", (-tf, -0.5 * fw, -0.5 * fh), (0.0, 0.5 * fw, 0.5 * fh), front),)
+        out.update(joint_type="fixed", origin=cell_center, geoms=geoms)
+        return out
+    # Open shelf: a board on the cell floor; link frame at the cell's front-bottom edge.
+    origin = np.array([xf, yc, z0])
+    board = _box(
+        "board",
+        (xb - xf + 0.001, -0.5 * w + 0.001, 0.0),
+        (0.0, 0.5 * w - 0.001, SHELF_BOARD),
+        colors["body"],
+    )
+    out.update(
+        joint_type="fixed",
+        origin=origin,
+        geoms=(board,),
+        interior_center=np.array([0.5 * (xb + xf), yc, 0.5 * (z0 + SHELF_BOARD + z1)]),
+        interior_size=np.array([d, w, h - SHELF_BOARD]),
+    )
+    return out
+
+
+def _finish_part(d: dict, inertial: Inertial) -> PartSpec:
+    return PartSpec(
+        link=d["link"],
+        joint=d["joint"],
+        kind=d["kind"],
+        semantic=SEMANTICS[d["kind"]][1],
+        row=d["row"],
+        col=d["col"],
+        cell_center=d["cell_center"],
+        cell_size=d["cell_size"],
+        joint_type=d["joint_type"],
+        axis=d["axis"],
+        origin=d["origin"],
+        lower=float(d["lower"]),
+        upper=float(d["upper"]),
+        damping=float(d["damping"]),
+        friction=float(d["friction"]),
+        hinge=d["hinge"],
+        handle=d["handle"],
+        handle_pos=d["handle_pos"],
+        handle_axis=d["handle_axis"],
+        interior_center=d.get("interior_center"),
+        interior_size=d.get("interior_size"),
+        geoms=tuple(d["geoms"]),
+        inertial=inertial,
+    )
