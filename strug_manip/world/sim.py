@@ -1,0 +1,224 @@
+"""Simulate and sense the manipulation scene.
+
+:class:`ManipulationWorld` resets the scene (robot at home, cabinet parts at given
+joint positions), steps MuJoCo, reads every part's joint position, the cabinet base's
+displacement and the object's pose, and renders RGB, depth [m] and segmentation from
+the robot's head camera; :func:`depth_to_points` deprojects a depth image to a
+world-frame point cloud.
+
+Camera convention (MuJoCo's): the camera looks along its -z axis, +x to the right of
+the image, +y up. A pixel (u, v) (column, row from the top-left) at depth d (distance
+along the optical axis) sits at ``((u + 0.5 - W/2) d / f, -(v + 0.5 - H/2) d / f, -d)``
+in the camera frame, with ``f = (H / 2) / tan(fovy / 2)`` [px].
+"""
+
+from __future__ import annotations
+
+import math
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+from planners.errors import ConfigError, UnknownNameError
+from strug_manip.world.scene import SceneConfig, SceneModel, build_scene
+
+
+@dataclass(frozen=True)
+class CameraFrame:
+    """One RGB-D frame.
+
+    Attributes:
+        rgb: colour, shape (H, W, 3), uint8.
+        depth: distance along the optical axis [m], shape (H, W), float32.
+        segmentation: MuJoCo geom id per pixel (-1: background), shape (H, W), int32.
+        T_world_camera: camera pose, 4x4 (camera looks along its -z).
+        fovy: vertical field of view [rad].
+    """
+
+    rgb: np.ndarray
+    depth: np.ndarray
+    segmentation: np.ndarray
+    T_world_camera: np.ndarray
+    fovy: float
+
+
+def depth_to_points(
+    depth: np.ndarray, T_world_camera: np.ndarray, fovy: float, max_depth: float = 10.0
+) -> tuple[np.ndarray, np.ndarray]:
+    """World-frame points of a depth image.
+
+    Args:
+        depth: (H, W) depth along the optical axis [m].
+        T_world_camera: 4x4 camera pose (MuJoCo convention, looking along -z).
+        fovy: vertical field of view [rad].
+        max_depth: pixels at or beyond this depth (background) are dropped [m].
+
+    Returns:
+        ``(points (N, 3) [m], pixel indices (N,) into the flattened image)``.
+    """
+    h, w = depth.shape
+    f = 0.5 * h / math.tan(0.5 * fovy)
+    flat = depth.reshape(-1).astype(np.float64)
+    keep = np.flatnonzero((flat > 0) & (flat < max_depth))
+    v, u = np.divmod(keep, w)
+    d = flat[keep]
+    p_cam = np.stack([(u + 0.5 - 0.5 * w) * d / f, -(v + 0.5 - 0.5 * h) * d / f, -d], axis=1)
+    return p_cam @ T_world_camera[:3, :3].T + T_world_camera[:3, 3], keep
+
+
+class ManipulationWorld:
+    """The scene, with reset, stepping, state read-out and rendering.
+
+    Args:
+        config: what to build (default: the built-in scene, cabinet seed 3).
+        workdir: where generated cabinets are written (default: a temporary folder).
+    """
+
+    def __init__(self, config: SceneConfig | None = None, workdir: Path | None = None) -> None:
+        self.config = config or SceneConfig()
+        self._tmp = None
+        if workdir is None:
+            self._tmp = tempfile.TemporaryDirectory(prefix="strug_scene_")
+            workdir = Path(self._tmp.name)
+        self.scene: SceneModel = build_scene(self.config, workdir)
+        self.model = self.scene.model
+        self.data = mujoco.MjData(self.model)
+        m = self.model
+        pre = self.scene.cabinet_prefix
+        self.part_joints = [
+            m.joint(j).name for j in range(m.njnt)
+            if m.joint(j).name.startswith(pre) and m.jnt_type[j] != mujoco.mjtJoint.mjJNT_FREE
+        ]  # fmt: skip
+        self._cabinet_body = m.body(pre + self.scene.cabinet.root).id
+        self._object_body = m.body("object").id
+        self._renderer: mujoco.Renderer | None = None
+        self.reset()
+
+    # --- state -------------------------------------------------------------------------
+    def reset(self, part_positions: dict[str, float] | None = None) -> None:
+        """Robot at home, object on the table, cabinet at rest with ``part_positions``."""
+        m, d = self.model, self.data
+        mujoco.mj_resetData(m, d)
+        for name, q in self.scene.home_qpos.items():
+            d.qpos[m.jnt_qposadr[m.joint(name).id]] = q
+        for name, q in (part_positions or {}).items():
+            self._set_joint(name, q)
+        for a in range(m.nu):
+            jid = m.actuator_trnid[a, 0]
+            if m.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT and m.actuator_gainprm[a, 0] > 0:
+                if m.actuator_biasprm[a, 1] != 0:  # position actuator: hold where the joint is
+                    d.ctrl[a] = d.qpos[m.jnt_qposadr[jid]]
+        self._fill_gripper_ctrl()
+        mujoco.mj_forward(m, d)
+        self._cabinet_start = d.xpos[self._cabinet_body].copy()
+
+    def _fill_gripper_ctrl(self) -> None:
+        m, d = self.model, self.data
+        aid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, "gripper")
+        if aid >= 0:
+            d.ctrl[aid] = m.actuator_ctrlrange[aid, 1]
+
+    def _set_joint(self, name: str, q: float) -> None:
+        m = self.model
+        full = name if name in self.part_joints else self.scene.cabinet_prefix + name
+        if full not in self.part_joints:
+            raise UnknownNameError("cabinet joint", name, self.part_joints)
+        self.data.qpos[m.jnt_qposadr[m.joint(full).id]] = q
+
+    def step(self, seconds: float) -> None:
+        """Advance physics by ``seconds`` of simulated time (whole steps)."""
+        if not seconds >= 0:
+            raise ConfigError(f"seconds must be >= 0, got {seconds!r}")
+        mujoco.mj_step(
+            self.model, self.data, nstep=max(1, round(seconds / self.model.opt.timestep))
+        )
+
+    def part_positions(self) -> dict[str, float]:
+        """Every cabinet part joint's position [m or rad], by joint name."""
+        m, d = self.model, self.data
+        return {n: float(d.qpos[m.jnt_qposadr[m.joint(n).id]]) for n in self.part_joints}
+
+    def cabinet_displacement(self) -> float:
+        """Horizontal distance the cabinet base moved since reset [m]."""
+        return float(
+            np.linalg.norm(self.data.xpos[self._cabinet_body][:2] - self._cabinet_start[:2])
+        )
+
+    def object_pose(self) -> np.ndarray:
+        """``T_world_object``, 4x4."""
+        T = np.eye(4)
+        T[:3, :3] = self.data.xmat[self._object_body].reshape(3, 3)
+        T[:3, 3] = self.data.xpos[self._object_body]
+        return T
+
+    def site_pose(self, name: str) -> np.ndarray:
+        """``T_world_site`` of a named site, 4x4."""
+        sid = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_SITE, name)
+        if sid < 0:
+            names = [self.model.site(i).name for i in range(self.model.nsite)]
+            raise UnknownNameError("site", name, names)
+        T = np.eye(4)
+        T[:3, :3] = self.data.site_xmat[sid].reshape(3, 3)
+        T[:3, 3] = self.data.site_xpos[sid]
+        return T
+
+    # --- sensing -----------------------------------------------------------------------
+    def _renderer_for(self) -> mujoco.Renderer:
+        if self._renderer is None:
+            self._renderer = mujoco.Renderer(self.model, self.config.height, self.config.width)
+        return self._renderer
+
+    def camera_pose(self, camera: str) -> tuple[np.ndarray, float]:
+        """``(T_world_camera 4x4, fovy [rad])`` of a named camera."""
+        cid = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_CAMERA, camera)
+        if cid < 0:
+            names = [self.model.camera(i).name for i in range(self.model.ncam)]
+            raise UnknownNameError("camera", camera, names)
+        T = np.eye(4)
+        T[:3, :3] = self.data.cam_xmat[cid].reshape(3, 3)
+        T[:3, 3] = self.data.cam_xpos[cid]
+        return T, math.radians(float(self.model.cam_fovy[cid]))
+
+    def render_rgb(
+        self, camera: str = "head_camera", width: int | None = None, height: int | None = None
+    ) -> np.ndarray:
+        """Colour image (H, W, 3) uint8 (size: the config's unless given, e.g. for pictures)."""
+        if width is None and height is None:
+            r = self._renderer_for()
+            r.update_scene(self.data, camera=camera)
+            return r.render().copy()
+        h, w = height or self.config.height, width or self.config.width
+        with mujoco.Renderer(self.model, h, w) as r:
+            r.update_scene(self.data, camera=camera)
+            return r.render().copy()
+
+    def render(self, camera: str = "head_camera") -> CameraFrame:
+        """RGB, depth [m] and geom segmentation from ``camera``."""
+        T, fovy = self.camera_pose(camera)
+        r = self._renderer_for()
+        r.update_scene(self.data, camera=camera)
+        rgb = r.render().copy()
+        r.enable_depth_rendering()
+        depth = r.render().copy()
+        r.disable_depth_rendering()
+        r.enable_segmentation_rendering()
+        seg = r.render()[:, :, 0].astype(np.int32)
+        r.disable_segmentation_rendering()
+        return CameraFrame(rgb, depth, seg, T, fovy)
+
+    def point_cloud(self, frame: CameraFrame) -> tuple[np.ndarray, np.ndarray]:
+        """World points (N, 3) [m] of ``frame`` and the geom id (N,) each one belongs to."""
+        pts, idx = depth_to_points(frame.depth, frame.T_world_camera, frame.fovy)
+        return pts, frame.segmentation.reshape(-1)[idx]
+
+    def close(self) -> None:
+        """Free the renderer and the temporary folder."""
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+        if self._tmp is not None:
+            self._tmp.cleanup()
+            self._tmp = None
