@@ -29,7 +29,7 @@ from strug_manip.experiments.table import to_markdown
 
 #: The demo: a short Table I run of the toy domains.
 DEMO_DOMAINS = ("tiger", "extendedtiger", "lightdark1d", "lightdark2d")
-DEMO_SOLVERS = ("random", "pomcp", "pomcpow")
+DEMO_SOLVERS = ("random", "pomcp", "pomcpow", "entropy", "active", "strug")
 DEMO_SEEDS = 20
 DEMO_SIMS = 1000
 
@@ -94,6 +94,16 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--json", action="store_true", help="print the summary as JSON")
     bench.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     _add_budget(bench)
+
+    scene = sub.add_parser("scene", help="picture Fetch in front of a generated cabinet")
+    scene.add_argument("--seed", type=int, default=3, help="cabinet generator seed")
+    scene.add_argument(
+        "--kinds", default="drawer,door,shelf,panel", help="part kinds the generator may use"
+    )
+    scene.add_argument("--out", type=Path, default=Path("scene.png"))
+    scene.add_argument("--camera", default="overview", help="overview or head_camera")
+    scene.add_argument("--width", type=int, default=960)
+    scene.add_argument("--height", type=int, default=720)
 
     demo = sub.add_parser("demo", help="a short Table I run of the toy domains")
     demo.add_argument("--out", type=Path, default=Path("runs/demo"))
@@ -170,6 +180,31 @@ def cmd_bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_scene(args: argparse.Namespace) -> int:
+    import cv2
+
+    from strug_manip.world import ManipulationWorld, SceneConfig
+
+    world = ManipulationWorld(SceneConfig(cabinet_seed=args.seed, cabinet_kinds=_split(args.kinds)))
+    world.step(0.5)  # let everything settle
+    rgb = world.render_rgb(args.camera, args.width, args.height)
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    if not cv2.imwrite(str(args.out), rgb[:, :, ::-1]):
+        raise ConfigError(f"could not write an image to {args.out}")
+    spec = world.scene.cabinet_spec
+    parts = (
+        ", ".join(
+            f"{p.link} {p.kind}" + (f" ({p.hinge} hinge)" if p.hinge else "") for p in spec.parts
+        )
+        if spec
+        else f"loaded from {world.config.cabinet_folder}"
+    )
+    print(f"cabinet seed {args.seed} ({spec.mass:.1f} kg): {parts}" if spec else parts)
+    print(f"wrote {args.out}")
+    world.close()
+    return 0
+
+
 def cmd_demo(args: argparse.Namespace) -> int:
     spec = BenchSpec(DEMO_DOMAINS, DEMO_SOLVERS, DEMO_SEEDS, {"sims": DEMO_SIMS})
     print(
@@ -194,6 +229,8 @@ def main(argv: list[str] | None = None) -> int:
             return cmd_run(args)
         if args.command == "bench":
             return cmd_bench(args)
+        if args.command == "scene":
+            return cmd_scene(args)
         return cmd_demo(args)
     except StrugError as exc:
         print(f"strug: error: {exc}", file=sys.stderr)

@@ -127,8 +127,8 @@ def build_scene(config: SceneConfig, workdir: Path) -> SceneModel:
     cabinet = load_articulated_object(folder)
     spec = mujoco.MjSpec.from_file(str(FETCH_SCENE_XML))
     spec.option.timestep = config.timestep
-    spec.visual.global_.offwidth = max(config.width, 640)
-    spec.visual.global_.offheight = max(config.height, 480)
+    spec.visual.global_.offwidth = max(config.width, 1280)
+    spec.visual.global_.offheight = max(config.height, 960)
     # The robot-only keyframe no longer fits once objects add coordinates: reset by name.
     for key in list(spec.keys):
         spec.delete(key)

@@ -108,9 +108,10 @@ class ManipulationWorld:
             self._set_joint(name, q)
         for a in range(m.nu):
             jid = m.actuator_trnid[a, 0]
-            if m.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT and m.actuator_gainprm[a, 0] > 0:
-                if m.actuator_biasprm[a, 1] != 0:  # position actuator: hold where the joint is
-                    d.ctrl[a] = d.qpos[m.jnt_qposadr[jid]]
+            # Position actuators (gain > 0, position bias) hold their joint where it is.
+            is_joint = m.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT
+            if is_joint and m.actuator_gainprm[a, 0] > 0 and m.actuator_biasprm[a, 1] != 0:
+                d.ctrl[a] = d.qpos[m.jnt_qposadr[jid]]
         self._fill_gripper_ctrl()
         mujoco.mj_forward(m, d)
         self._cabinet_start = d.xpos[self._cabinet_body].copy()
@@ -191,9 +192,25 @@ class ManipulationWorld:
             r.update_scene(self.data, camera=camera)
             return r.render().copy()
         h, w = height or self.config.height, width or self.config.width
+        vis = self.model.vis.global_
+        if not (0 < w <= vis.offwidth and 0 < h <= vis.offheight):
+            raise ConfigError(
+                f"image size {w}x{h} must be within the offscreen buffer "
+                f"{vis.offwidth}x{vis.offheight} px"
+            )
         with mujoco.Renderer(self.model, h, w) as r:
             r.update_scene(self.data, camera=camera)
             return r.render().copy()
+
+    def render_rgbd(self, camera: str = "head_camera") -> tuple[np.ndarray, np.ndarray]:
+        """Colour (H, W, 3) uint8 and depth [m] (H, W) float32: what the robot's sensor gives."""
+        r = self._renderer_for()
+        r.update_scene(self.data, camera=camera)
+        rgb = r.render().copy()
+        r.enable_depth_rendering()
+        depth = r.render().copy()
+        r.disable_depth_rendering()
+        return rgb, depth
 
     def render(self, camera: str = "head_camera") -> CameraFrame:
         """RGB, depth [m] and geom segmentation from ``camera``."""

@@ -1,0 +1,98 @@
+"""The manipulation world: composes, simulates without warnings, senses geometry right."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from planners.errors import StrugError
+from strug_manip.world import ManipulationWorld, SceneConfig, depth_to_points
+from strug_manip.world.scene import look_at_xyaxes
+
+import mujoco  # after strug_manip, which selects offscreen rendering  # isort: skip
+
+
+def _warnings(data: mujoco.MjData) -> dict[int, int]:
+    return {
+        i: int(data.warning[i].number) for i in range(len(data.warning)) if data.warning[i].number
+    }
+
+
+@pytest.fixture(scope="module")
+def world():
+    w = ManipulationWorld(SceneConfig(cabinet_seed=3))
+    yield w
+    w.close()
+
+
+@pytest.mark.parametrize("kinds", [("drawer",), ("door",), ("drawer", "door", "shelf", "panel")])
+def test_scene_simulates_two_seconds_without_warnings(kinds) -> None:
+    w = ManipulationWorld(SceneConfig(cabinet_seed=11, cabinet_kinds=kinds))
+    start = w.object_pose()
+    w.step(2.0)
+    assert _warnings(w.data) == {}
+    assert np.all(np.isfinite(w.data.qpos))
+    assert w.cabinet_displacement() < 0.005  # the cabinet stands still
+    assert np.linalg.norm(w.object_pose()[:3, 3] - start[:3, 3]) < 0.005  # the can rests
+    assert all(abs(q) < 0.01 for q in w.part_positions().values())  # parts stay shut
+    w.close()
+
+
+def test_reset_sets_part_positions_by_name(world) -> None:
+    joint = world.part_joints[0]
+    world.reset({joint: 0.05})
+    assert world.part_positions()[joint] == pytest.approx(0.05)
+    world.reset()
+    assert world.part_positions()[joint] == 0.0
+    with pytest.raises(StrugError, match="unknown cabinet joint 'nope'"):
+        world.reset({"nope": 0.1})
+
+
+def test_rgbd_frame_shapes_and_ranges(world) -> None:
+    world.reset()
+    frame = world.render("head_camera")
+    assert frame.rgb.shape == (240, 320, 3) and frame.rgb.dtype == np.uint8
+    assert frame.depth.shape == (240, 320)
+    assert frame.segmentation.shape == (240, 320)
+    cabinet_geoms = {
+        g for g in range(world.model.ngeom)
+        if world.model.body(world.model.geom_bodyid[g]).name.startswith("cabinet/")
+    }  # fmt: skip
+    assert np.isin(frame.segmentation, list(cabinet_geoms)).mean() > 0.05  # it sees the cabinet
+    pts, geoms = world.point_cloud(frame)
+    on_cabinet = pts[np.isin(geoms, list(cabinet_geoms))]
+    # Every cabinet point lies in the cabinet's footprint, in front of the robot.
+    assert on_cabinet[:, 0].min() > world.config.cabinet_distance - 0.02
+
+
+def test_point_cloud_of_a_known_box_matches_its_geometry() -> None:
+    eye = (-0.3, 0.4, 0.9)
+    axes = " ".join(f"{v:.6f}" for v in look_at_xyaxes(eye, (0.4, -0.2, 0.2)))
+    xml = f"""
+    <mujoco><compiler angle="radian"/>
+      <visual><global offwidth="320" offheight="240"/></visual>
+      <worldbody>
+        <camera name="cam" pos="-0.3 0.4 0.9" xyaxes="{axes}" fovy="50"/>
+        <geom name="box" type="box" size="0.15 0.1 0.2" pos="0.4 -0.2 0.2" euler="0 0 0.5"/>
+      </worldbody></mujoco>"""
+    model = mujoco.MjModel.from_xml_string(xml)
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    with mujoco.Renderer(model, 240, 320) as r:
+        r.update_scene(data, camera="cam")
+        r.enable_depth_rendering()
+        depth = r.render().copy()
+    T = np.eye(4)
+    T[:3, :3] = data.cam_xmat[0].reshape(3, 3)
+    T[:3, 3] = data.cam_xpos[0]
+    pts, _ = depth_to_points(depth, T, np.radians(model.cam_fovy[0]))
+    assert len(pts) > 2000
+    # Distance of each point to the box surface, in the box frame.
+    R = data.geom_xmat[0].reshape(3, 3)
+    local = (pts - data.geom_xpos[0]) @ R
+    half = model.geom_size[0]
+    inside = np.abs(local) - half
+    dist = np.where(np.all(inside <= 0, axis=1), -inside.max(axis=1),
+                    np.linalg.norm(np.maximum(inside, 0), axis=1))  # fmt: skip
+    assert np.percentile(dist, 99) < 0.005, np.percentile(dist, [50, 99, 100])
+    assert dist.max() < 0.01
