@@ -1,0 +1,1 @@
+"""Robot control: inverse kinematics, arm motion planning and controller execution."""
