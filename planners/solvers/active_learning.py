@@ -95,13 +95,5 @@ class ActiveLearningPlanner:
             )
             phase = "exploit"
         action = result.best if result.best is not None else pomdp.action_space().sample(rng)
-        info = SearchInfo(
-            sims=result.sims,
-            seconds=result.seconds,
-            tree_nodes=result.belief_nodes + result.action_nodes,
-            actions=result.actions,
-            q=result.q,
-            visits=result.visits,
-            extra={"entropy": h, "phase": phase, "bonus": result.bonus},
-        )
+        info = result.search_info(entropy=h, phase=phase)
         return action, info

@@ -37,7 +37,7 @@ import numpy as np
 
 from planners.errors import ConfigError, check_positive_float, check_positive_int
 from planners.solvers.action_tree import ActionTree, check_widening, resolve_widening
-from planners.solvers.base import Budget, TreeSearchConfig, UniformStream
+from planners.solvers.base import Budget, SearchInfo, TreeSearchConfig, UniformStream
 
 #: Leaf estimators of a new belief node.
 ROLLOUTS = ("random", "plan")
@@ -146,6 +146,18 @@ class TreeResult:
     action_nodes: int
     seconds: float
     tree: ActionTree = field(repr=False)
+
+    def search_info(self, extra_seconds: float = 0.0, **extra: Any) -> SearchInfo:
+        """The :class:`SearchInfo` of this search, with solver-specific ``extra`` figures."""
+        return SearchInfo(
+            sims=self.sims,
+            seconds=self.seconds + extra_seconds,
+            tree_nodes=self.belief_nodes + self.action_nodes,
+            actions=self.actions,
+            q=self.q,
+            visits=self.visits,
+            extra={"bonus": self.bonus, **extra},
+        )
 
 
 def belief_tree_search(

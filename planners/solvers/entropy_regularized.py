@@ -66,13 +66,5 @@ class EntropyPlanner:
             node_value=self.value, beta=cfg.beta,
         )  # fmt: skip
         action = result.best if result.best is not None else self.pomdp.action_space().sample(rng)
-        info = SearchInfo(
-            sims=result.sims,
-            seconds=result.seconds,
-            tree_nodes=result.belief_nodes + result.action_nodes,
-            actions=result.actions,
-            q=result.q,
-            visits=result.visits,
-            extra={"entropy": result.root_value, "bonus": result.bonus},
-        )
+        info = result.search_info(entropy=result.root_value)
         return action, info

@@ -79,18 +79,10 @@ class STRUGPlanner:
             beta=cfg.beta,
         )
         action = result.best if result.best is not None else self.pomdp.action_space().sample(rng)
-        info = SearchInfo(
-            sims=result.sims,
-            seconds=result.seconds + matrix.seconds,
-            tree_nodes=result.belief_nodes + result.action_nodes,
-            actions=result.actions,
-            q=result.q,
-            visits=result.visits,
-            extra={
-                "tru": result.root_value,
-                "bonus": result.bonus,
-                "matrix_seconds": matrix.seconds,
-                "plan_executions": matrix.executions,
-            },
+        info = result.search_info(
+            matrix.seconds,
+            tru=result.root_value,
+            matrix_seconds=matrix.seconds,
+            plan_executions=matrix.executions,
         )
         return action, info

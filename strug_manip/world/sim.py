@@ -45,6 +45,14 @@ class CameraFrame:
     fovy: float
 
 
+def _pose(xmat: np.ndarray, xpos: np.ndarray) -> np.ndarray:
+    """4x4 pose from MuJoCo's flat (9,) rotation and (3,) position."""
+    T = np.eye(4)
+    T[:3, :3] = np.asarray(xmat).reshape(3, 3)
+    T[:3, 3] = xpos
+    return T
+
+
 def depth_to_points(
     depth: np.ndarray, T_world_camera: np.ndarray, fovy: float, max_depth: float = 10.0
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -150,10 +158,7 @@ class ManipulationWorld:
 
     def object_pose(self) -> np.ndarray:
         """``T_world_object``, 4x4."""
-        T = np.eye(4)
-        T[:3, :3] = self.data.xmat[self._object_body].reshape(3, 3)
-        T[:3, 3] = self.data.xpos[self._object_body]
-        return T
+        return _pose(self.data.xmat[self._object_body], self.data.xpos[self._object_body])
 
     def site_pose(self, name: str) -> np.ndarray:
         """``T_world_site`` of a named site, 4x4."""
@@ -161,10 +166,7 @@ class ManipulationWorld:
         if sid < 0:
             names = [self.model.site(i).name for i in range(self.model.nsite)]
             raise UnknownNameError("site", name, names)
-        T = np.eye(4)
-        T[:3, :3] = self.data.site_xmat[sid].reshape(3, 3)
-        T[:3, 3] = self.data.site_xpos[sid]
-        return T
+        return _pose(self.data.site_xmat[sid], self.data.site_xpos[sid])
 
     # --- sensing -----------------------------------------------------------------------
     def _renderer_for(self) -> mujoco.Renderer:
@@ -178,9 +180,7 @@ class ManipulationWorld:
         if cid < 0:
             names = [self.model.camera(i).name for i in range(self.model.ncam)]
             raise UnknownNameError("camera", camera, names)
-        T = np.eye(4)
-        T[:3, :3] = self.data.cam_xmat[cid].reshape(3, 3)
-        T[:3, 3] = self.data.cam_xpos[cid]
+        T = _pose(self.data.cam_xmat[cid], self.data.cam_xpos[cid])
         return T, math.radians(float(self.model.cam_fovy[cid]))
 
     def render_rgb(
