@@ -82,6 +82,12 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--solver", required=True, help=f"one of {', '.join(SOLVERS)}")
     run.add_argument("--seed", type=int, default=0)
     run.add_argument("--json", action="store_true", help="one JSON object per line per step")
+    run.add_argument(
+        "--rerun",
+        type=Path,
+        metavar="FILE.rrd",
+        help="log the episode (belief, search statistics) to a rerun recording",
+    )
     _add_budget(run)
 
     bench = sub.add_parser("bench", help="run a Table I grid of episodes")
@@ -146,7 +152,18 @@ def cmd_run(args: argparse.Namespace) -> int:
 
     if not args.json:
         print(f"{args.domain} / {args.solver} / seed {args.seed}: {config}")
-    result = run_episode(pomdp, config, args.seed, n_particles=args.particles, on_step=show)
+    recorder = None
+    if args.rerun is not None:
+        from strug_manip.experiments.rerun_log import RerunRecorder
+
+        args.rerun.parent.mkdir(parents=True, exist_ok=True)
+        recorder = RerunRecorder(args.rerun, pomdp)
+    result = run_episode(
+        pomdp, config, args.seed, n_particles=args.particles, on_step=show, recorder=recorder
+    )
+    if recorder is not None:
+        recorder.close()
+        print(f"wrote {args.rerun} (open with: rerun {args.rerun})", file=sys.stderr)
     if args.json:
         print(
             json.dumps(

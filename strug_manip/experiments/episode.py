@@ -106,6 +106,7 @@ def run_episode(
     *,
     n_particles: int = DEFAULT_PARTICLES,
     on_step: Callable[[StepRecord], None] | None = None,
+    recorder: Callable[[StepRecord, Any, Any], None] | None = None,
 ) -> EpisodeResult:
     """Run one episode of ``solver`` on ``pomdp`` until ``done`` or ``max_steps``.
 
@@ -115,6 +116,8 @@ def run_episode(
         seed: the episode seed (>= 0).
         n_particles: belief size.
         on_step: called with every step record as soon as it exists.
+        recorder: called as ``recorder(record, belief after the update or None, true
+            state after the step)``, e.g. a ``rerun_log.RerunRecorder``.
     """
     check_positive_int("n_particles", n_particles)
     world_rng, belief_rng, plan_rng = episode_generators(seed)
@@ -158,6 +161,8 @@ def run_episode(
         trajectory.append(state_next)
         if on_step is not None:
             on_step(rec)
+        if recorder is not None:
+            recorder(rec, None if done else belief, state_next)
         if done:
             break
         state = state_next
