@@ -1,1 +1,7 @@
-"""placeholder"""
+"""Perception: RGB-D from the robot's head camera to an initial belief over kinematic models.
+
+Planned contents (see ../shared/DESIGN.md, "Perception"): part segmentation, joint type
+and joint parameter prediction (torch), the pull-affordance heat map that biases
+controller parameters, and the point-cloud observation model. This package may import
+numpy, torch and opencv only; it holds no code yet.
+"""
