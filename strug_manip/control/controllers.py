@@ -28,6 +28,14 @@ free-standing cabinet is dragged, as physics decides. ``Push``, ``PullV`` and
 ``PullH`` grasp the part at ``g`` and move :data:`PROBE_DISTANCE`
 along ``-approach``, world z and the horizontal direction of the finger opening.
 
+Planning under the belief: ``run(world, ..., plan_world=w)`` makes the collision
+checks of the key poses and paths and the OMPL state validity use ``w``, a
+*planning world* built from the believed cabinet (:func:`believed_spec`,
+:meth:`ManipulationWorld.from_cabinet_spec`) with the believed part positions, into
+which the robot's (and the object's) current state is copied by joint name before
+every check; execution and the outcome's judgement stay in ``world``. Without it the
+controllers plan against ``world`` itself.
+
 Every run returns an :class:`Outcome`: success or a failure reason
 (:data:`REASONS`), the executed torso + arm trajectory, the simulated time and the wall
 time spent in IK, motion planning and physics. The same world state, parameters and
@@ -40,6 +48,7 @@ opening direction. Units: [m], [rad], [s].
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from collections.abc import Callable, Sequence
@@ -52,7 +61,7 @@ import numpy as np
 from planners.errors import ConfigError, UnknownNameError
 from strug_manip.control.ik import FetchIK, check_pose
 from strug_manip.control.motion import ArmMotionPlanner
-from strug_manip.objects.generator import PartSpec
+from strug_manip.objects.generator import CabinetSpec, PartSpec
 from strug_manip.robot.fetch import BASE_JOINTS, GRIPPER_JOINTS, GRIPPER_SITE, FetchKinematics
 from strug_manip.world.scripted import (
     GRIPPER_CLOSED,
@@ -248,10 +257,95 @@ class Controller(Protocol):
     """A parameterised skill: ``run`` executes it in the world and reports."""
 
     def run(
-        self, world: ManipulationWorld, seed: int = 0, observer: Observer | None = None
+        self,
+        world: ManipulationWorld,
+        seed: int = 0,
+        observer: Observer | None = None,
+        plan_world: ManipulationWorld | None = None,
     ) -> Outcome:
-        """Execute in ``world`` (its physics state advances); deterministic in ``seed``."""
+        """Execute in ``world`` (its physics state advances), planning against
+        ``plan_world`` (default ``world``); deterministic in ``seed``."""
         ...
+
+
+#: Joint limit of a part whose believed joint type differs from the spec's and whose
+#: believed travel is unbounded: prismatic [m], revolute [rad].
+BELIEVED_PRISMATIC_UPPER = 0.5
+BELIEVED_REVOLUTE_UPPER = 0.5 * math.pi
+
+
+def believed_spec(
+    spec: CabinetSpec,
+    link: str,
+    joint: BelievedJoint,
+    T_world_cabinet: np.ndarray | None = None,
+    q: float = 0.0,
+) -> CabinetSpec:
+    """A copy of ``spec`` with part ``link``'s joint replaced by the believed ``joint``
+    (a belief particle's cabinet, to build a planning world from).
+
+    The part's geometry is kept where it is with the part closed; the link frame moves
+    to the believed hinge (revolute beliefs), the geometry and centre of mass being
+    re-expressed in it. Limits: ``[min(lower, 0), q + joint.limit]`` (same type: the
+    spec's lower; a changed type with unbounded travel: :data:`BELIEVED_PRISMATIC_UPPER`
+    [m] or :data:`BELIEVED_REVOLUTE_UPPER` [rad]).
+
+    Args:
+        spec: the cabinet (e.g. the generator's ground truth), not modified.
+        link: the movable part to change (``link_1``, ...).
+        joint: the believed joint in the world frame (axis, origin [m], limit: travel
+            left [m or rad] from ``q``).
+        T_world_cabinet: the cabinet frame in the world, (4, 4) [m] (default: identity,
+            ``joint`` given in the cabinet frame), e.g. ``world.scene.T_world_cabinet``.
+        q: the believed current joint position [m or rad].
+
+    Raises:
+        UnknownNameError: ``link`` is not a movable part of ``spec``.
+        ConfigError: a bad argument.
+    """
+    if not isinstance(spec, CabinetSpec):
+        raise ConfigError(f"spec must be a CabinetSpec, got {spec!r}")
+    if not isinstance(joint, BelievedJoint):
+        raise ConfigError(f"joint must be a BelievedJoint, got {joint!r}")
+    T = np.eye(4) if T_world_cabinet is None else check_pose("T_world_cabinet", T_world_cabinet)
+    if isinstance(q, bool) or not isinstance(q, int | float) or not math.isfinite(q):
+        raise ConfigError(f"q must be a finite number [m or rad], got {q!r}")
+    links = [p.link for p in spec.movable_parts]
+    if link not in links:
+        raise UnknownNameError("movable cabinet part link", link, links)
+    part = spec.part(link)
+    R, t = T[:3, :3], T[:3, 3]
+    axis = R.T @ joint.axis
+    if joint.type == "revolute":
+        origin = R.T @ (joint.origin - t)
+    else:
+        origin = np.asarray(part.origin, dtype=float).copy()
+    shift = np.asarray(part.origin, dtype=float) - origin  # old link frame in the new one
+    geoms = tuple(
+        dataclasses.replace(g, pos=tuple(float(v) for v in np.asarray(g.pos) + shift))
+        for g in part.geoms
+    )
+    inertial = dataclasses.replace(part.inertial, com=np.asarray(part.inertial.com) + shift)
+    same = joint.type == part.joint_type
+    if math.isfinite(joint.limit):
+        upper = float(q) + joint.limit
+    elif same:
+        upper = float(part.upper)
+    else:
+        upper = BELIEVED_PRISMATIC_UPPER if joint.type == "prismatic" else BELIEVED_REVOLUTE_UPPER
+    lower = min(float(part.lower) if same else 0.0, float(q), 0.0)
+    new = dataclasses.replace(
+        part,
+        joint_type=joint.type,
+        axis=axis,
+        origin=origin,
+        lower=lower,
+        upper=upper,
+        geoms=geoms,
+        inertial=inertial,
+    )
+    parts = tuple(new if p.link == link else p for p in spec.parts)
+    return dataclasses.replace(spec, parts=parts)
 
 
 # --- helpers -------------------------------------------------------------------------------
@@ -378,24 +472,44 @@ def _fetch_ik() -> FetchIK:
     return _IK
 
 
+#: At most this many planners (one per scene model) are kept.
+_MAX_PLANNERS = 16
+
+
 def _planner(model: mujoco.MjModel) -> ArmMotionPlanner:
     key = id(model)
     if key not in _PLANNERS or _PLANNERS[key].model is not model:
+        while len(_PLANNERS) >= _MAX_PLANNERS:
+            _PLANNERS.pop(next(iter(_PLANNERS)))  # the oldest (e.g. a discarded belief)
         _PLANNERS[key] = ArmMotionPlanner(model)
     return _PLANNERS[key]
 
 
 class _Run:
-    """One controller execution: shared machinery (IK, planning, driving, timing)."""
+    """One controller execution: shared machinery (IK, planning, driving, timing).
 
-    def __init__(self, world: ManipulationWorld, seed: int, observer: Observer | None) -> None:
+    Collision checks and motion plans use ``plan_world`` (default ``world``), synced
+    with the robot's state in ``world`` by joint name before each; driving and the
+    outcome use ``world``.
+    """
+
+    def __init__(
+        self,
+        world: ManipulationWorld,
+        seed: int,
+        observer: Observer | None,
+        plan_world: ManipulationWorld | None = None,
+    ) -> None:
         if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
             raise ConfigError(f"seed must be a non-negative int, got {seed!r}")
+        if plan_world is not None and not isinstance(plan_world, ManipulationWorld):
+            raise ConfigError(f"plan_world must be a ManipulationWorld or None, got {plan_world!r}")
         self.world, self.seed, self.observer = world, int(seed), observer
+        self.plan_world = world if plan_world is None else plan_world
         self.t_wall = time.perf_counter()
         self.kin = _kin()
         self.ik = _fetch_ik()
-        self.planner = _planner(world.model)
+        self.planner = _planner(self.plan_world.model)
         self.drv = _Recorder(world, self.kin, TIME_BUDGET)
         self.ik_time = 0.0
         self.plan_time = 0.0
@@ -403,8 +517,8 @@ class _Run:
         lim = self.kin.joint_limits()
         self.limits = [(lim[j][0] + 0.01, lim[j][1] - 0.01) for j in IK_JOINTS]
         self.base = self.drv.base
-        m = world.model
-        pre = world.scene.cabinet_prefix
+        m = self.plan_world.model  # body ids of the collision checks
+        pre = self.plan_world.scene.cabinet_prefix
         self.cabinet_bodies = frozenset(b for b in range(m.nbody) if m.body(b).name.startswith(pre))
         self.object_body = frozenset({m.body("object").id})
         self.finger_bodies = [f"{n.removesuffix('_joint')}_link" for n in GRIPPER_JOINTS]
@@ -508,11 +622,20 @@ class _Run:
         return out
 
     # -- planning ----------------------------------------------------------------------------
+    def sync_plan(self) -> ManipulationWorld:
+        """The planning world, the robot's and the object's state copied into it from the
+        execution world by joint name (its cabinet stays as believed)."""
+        if self.plan_world is not self.world:
+            self.plan_world.copy_robot_state(self.world)
+        return self.plan_world
+
     def scratch(self, base: np.ndarray | None = None) -> mujoco.MjData:
-        """A copy of the world's state with the base at ``base`` (default its target)."""
-        m = self.world.model
+        """A copy of the planning world's state (synced, :meth:`sync_plan`) with the base
+        at ``base`` (default its target)."""
+        pw = self.sync_plan()
+        m = pw.model
         d = mujoco.MjData(m)
-        d.qpos[:] = self.world.data.qpos
+        d.qpos[:] = pw.data.qpos
         for j, v in zip(BASE_JOINTS, self.base if base is None else base, strict=True):
             d.qpos[m.jnt_qposadr[m.joint(j).id]] = v
         mujoco.mj_kinematics(m, d)
@@ -555,7 +678,7 @@ class _Run:
         (with the base at ``base``, default its target)."""
         t = time.perf_counter()
         where = self.base if base is None else base
-        hits = _CollisionChecker(self.world, where).path(qs, allowed)
+        hits = _CollisionChecker(self.sync_plan(), where).path(qs, allowed)
         self.plan_time += time.perf_counter() - t
         if hits:
             raise _RunFailureError("collision", f"the planned path touches {hits[0]}")
@@ -676,15 +799,17 @@ def _grasp_and_move(
     *,
     close: bool = True,
     min_motion: float = 0.0,
+    plan_world: ManipulationWorld | None = None,
 ) -> Outcome:
     """Reach ``g``, grasp (``close``) and move the gripper along ``motion(g)`` (its poses
     and their path length [m]), all under the believed model in ``motion``.
 
     Success: the TCP still holds the grasp point (if ``close``), the cabinet moved at
     most :data:`CABINET_TOLERANCE`, and the grasped part's joint moved by more than
-    ``min_motion`` [m or rad] (ground truth, measured).
+    ``min_motion`` [m or rad] (ground truth, measured). Collision checks and plans use
+    ``plan_world`` (default ``world``).
     """
-    run = _Run(world, seed, observer)
+    run = _Run(world, seed, observer, plan_world)
     g = _check_g(g)
     link = grasped_part(world, g)
     try:
@@ -829,9 +954,14 @@ class OpenDrawer:
     travel: float = DRAWER_TRAVEL
 
     def run(
-        self, world: ManipulationWorld, seed: int = 0, observer: Observer | None = None
+        self,
+        world: ManipulationWorld,
+        seed: int = 0,
+        observer: Observer | None = None,
+        plan_world: ManipulationWorld | None = None,
     ) -> Outcome:
-        """Execute (see the class docstring)."""
+        """Execute in ``world`` (see the class docstring), collision checks and motion
+        plans against ``plan_world`` (default ``world``; e.g. the believed cabinet)."""
         travel = _check_travel("travel", self.travel)
         return _grasp_and_move(
             world,
@@ -840,6 +970,7 @@ class OpenDrawer:
             seed,
             observer,
             min_motion=OPEN_FRACTION * min(travel, self.joint.limit),
+            plan_world=plan_world,
         )
 
 
@@ -861,9 +992,14 @@ class OpenDoor:
     angle: float = DOOR_ANGLE
 
     def run(
-        self, world: ManipulationWorld, seed: int = 0, observer: Observer | None = None
+        self,
+        world: ManipulationWorld,
+        seed: int = 0,
+        observer: Observer | None = None,
+        plan_world: ManipulationWorld | None = None,
     ) -> Outcome:
-        """Execute (see the class docstring)."""
+        """Execute in ``world`` (see the class docstring), collision checks and motion
+        plans against ``plan_world`` (default ``world``; e.g. the believed cabinet)."""
         angle = _check_travel("angle", self.angle)
         return _grasp_and_move(
             world,
@@ -872,6 +1008,7 @@ class OpenDoor:
             seed,
             observer,
             min_motion=OPEN_FRACTION * min(angle, self.joint.limit),
+            plan_world=plan_world,
         )
 
 
@@ -890,11 +1027,22 @@ class Push:
     g: np.ndarray
 
     def run(
-        self, world: ManipulationWorld, seed: int = 0, observer: Observer | None = None
+        self,
+        world: ManipulationWorld,
+        seed: int = 0,
+        observer: Observer | None = None,
+        plan_world: ManipulationWorld | None = None,
     ) -> Outcome:
-        """Execute (see the class docstring)."""
+        """Execute in ``world`` (see the class docstring), collision checks and motion
+        plans against ``plan_world`` (default ``world``; e.g. the believed cabinet)."""
         return _grasp_and_move(
-            world, self.g, _probe(lambda g: g[:3, 0]), seed, observer, min_motion=0.005
+            world,
+            self.g,
+            _probe(lambda g: g[:3, 0]),
+            seed,
+            observer,
+            min_motion=0.005,
+            plan_world=plan_world,
         )
 
 
@@ -907,9 +1055,14 @@ class PullV:
     down: bool = False
 
     def run(
-        self, world: ManipulationWorld, seed: int = 0, observer: Observer | None = None
+        self,
+        world: ManipulationWorld,
+        seed: int = 0,
+        observer: Observer | None = None,
+        plan_world: ManipulationWorld | None = None,
     ) -> Outcome:
-        """Execute (see the class docstring)."""
+        """Execute in ``world`` (see the class docstring), collision checks and motion
+        plans against ``plan_world`` (default ``world``; e.g. the believed cabinet)."""
         sign = -1.0 if self.down else 1.0
         return _grasp_and_move(
             world,
@@ -918,6 +1071,7 @@ class PullV:
             seed,
             observer,
             min_motion=0.005,
+            plan_world=plan_world,
         )
 
 
@@ -932,9 +1086,14 @@ class PullH:
     sideways: bool = False
 
     def run(
-        self, world: ManipulationWorld, seed: int = 0, observer: Observer | None = None
+        self,
+        world: ManipulationWorld,
+        seed: int = 0,
+        observer: Observer | None = None,
+        plan_world: ManipulationWorld | None = None,
     ) -> Outcome:
-        """Execute (see the class docstring)."""
+        """Execute in ``world`` (see the class docstring), collision checks and motion
+        plans against ``plan_world`` (default ``world``; e.g. the believed cabinet)."""
 
         def direction(g: np.ndarray) -> np.ndarray:
             a = -g[:3, 0].copy()
@@ -944,7 +1103,15 @@ class PullH:
                 a = np.cross([0.0, 0.0, 1.0], a)
             return a
 
-        return _grasp_and_move(world, self.g, _probe(direction), seed, observer, min_motion=0.005)
+        return _grasp_and_move(
+            world,
+            self.g,
+            _probe(direction),
+            seed,
+            observer,
+            min_motion=0.005,
+            plan_world=plan_world,
+        )
 
 
 # --- pick and place ------------------------------------------------------------------------
@@ -996,12 +1163,17 @@ class Pick:
     lift: float = LIFT_HEIGHT
 
     def run(
-        self, world: ManipulationWorld, seed: int = 0, observer: Observer | None = None
+        self,
+        world: ManipulationWorld,
+        seed: int = 0,
+        observer: Observer | None = None,
+        plan_world: ManipulationWorld | None = None,
     ) -> Outcome:
-        """Execute (see the class docstring)."""
+        """Execute in ``world`` (see the class docstring), collision checks and motion
+        plans against ``plan_world`` (default ``world``; e.g. the believed cabinet)."""
         _check_object(world, self.o)
         lift = _check_travel("lift", self.lift)
-        run = _Run(world, seed, observer)
+        run = _Run(world, seed, observer, plan_world)
         T_wo = world.object_pose()
         z0 = float(T_wo[2, 3])
         allow = [(b, self.o) for b in _GRIPPER_BODIES]
@@ -1058,13 +1230,18 @@ class Place:
     clearance: float = 0.45
 
     def run(
-        self, world: ManipulationWorld, seed: int = 0, observer: Observer | None = None
+        self,
+        world: ManipulationWorld,
+        seed: int = 0,
+        observer: Observer | None = None,
+        plan_world: ManipulationWorld | None = None,
     ) -> Outcome:
-        """Execute (see the class docstring)."""
+        """Execute in ``world`` (see the class docstring), collision checks and motion
+        plans against ``plan_world`` (default ``world``; e.g. the believed cabinet)."""
         _check_object(world, self.o)
         p = check_pose("p (T_world_object)", self.p)
         clearance = _check_travel("clearance", self.clearance)
-        run = _Run(world, seed, observer)
+        run = _Run(world, seed, observer, plan_world)
         allow = [(b, self.o) for b in _GRIPPER_BODIES]
         try:
             mujoco.mj_forward(world.model, world.data)

@@ -45,7 +45,8 @@ class SceneConfig:
     """What the scene holds and where.
 
     Attributes:
-        cabinet_seed: seed of the generated cabinet (ignored if ``cabinet_folder``).
+        cabinet_seed: seed of the generated cabinet (ignored if ``cabinet_folder`` or
+            ``cabinet_spec``).
         cabinet_kinds: part kinds the generator may use (``drawer``, ``door``,
             ``shelf``, ``panel``).
         cabinet_folder: a PartNet-Mobility folder to load instead of generating one.
@@ -54,6 +55,11 @@ class SceneConfig:
         table_xy: position of the table centre [m].
         timestep: physics step [s].
         width, height: camera image size [px].
+        cabinet_spec: a cabinet to build instead of generating one from
+            ``cabinet_seed`` (e.g. a belief particle: the generator's spec with some
+            parts' joints replaced, see
+            :func:`strug_manip.control.controllers.believed_spec`); excludes
+            ``cabinet_folder``. Not compared or hashed.
     """
 
     cabinet_seed: int = 3
@@ -65,8 +71,16 @@ class SceneConfig:
     timestep: float = 0.002
     width: int = 320
     height: int = 240
+    cabinet_spec: CabinetSpec | None = field(default=None, compare=False)
 
     def __post_init__(self) -> None:
+        if self.cabinet_spec is not None:
+            if not isinstance(self.cabinet_spec, CabinetSpec):
+                raise ConfigError(
+                    f"cabinet_spec must be a CabinetSpec or None, got {self.cabinet_spec!r}"
+                )
+            if self.cabinet_folder is not None:
+                raise ConfigError("give cabinet_spec or cabinet_folder, not both")
         check_positive_float("cabinet_distance", self.cabinet_distance)
         check_positive_float("timestep", self.timestep, upper=0.01)
         for name in ("width", "height"):
@@ -118,9 +132,13 @@ def _home_by_name() -> dict[str, float]:
 
 
 def build_scene(config: SceneConfig, workdir: Path) -> SceneModel:
-    """Build the scene of ``config``; generated cabinets are written under ``workdir``."""
+    """Build the scene of ``config``; generated (or given) cabinets are written under
+    ``workdir``."""
     if config.cabinet_folder is not None:
         folder, cab_spec = Path(config.cabinet_folder), None
+    elif config.cabinet_spec is not None:
+        cab_spec = config.cabinet_spec
+        folder = write_partnet(cab_spec, Path(workdir) / cab_spec.name)
     else:
         cab_spec = generate_cabinet(config.cabinet_seed, kinds=config.cabinet_kinds)
         folder = write_partnet(cab_spec, Path(workdir) / cab_spec.name)

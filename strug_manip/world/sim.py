@@ -23,7 +23,11 @@ import mujoco
 import numpy as np
 
 from planners.errors import ConfigError, UnknownNameError
+from strug_manip.objects import CabinetSpec
 from strug_manip.world.scene import SceneConfig, SceneModel, build_scene
+
+#: The graspable object's free joint (its pose is observed, not believed).
+OBJECT_JOINT = "object/free"
 
 
 @dataclass(frozen=True)
@@ -100,10 +104,31 @@ class ManipulationWorld:
             m.joint(j).name for j in range(m.njnt)
             if m.joint(j).name.startswith(pre) and m.jnt_type[j] != mujoco.mjtJoint.mjJNT_FREE
         ]  # fmt: skip
+        #: The Fetch's joints (base, torso, arm, head, fingers), by name.
+        self.robot_joints: list[str] = list(self.scene.home_qpos)
         self._cabinet_body = m.body(pre + self.scene.cabinet.root).id
         self._object_body = m.body("object").id
         self._renderer: mujoco.Renderer | None = None
         self.reset()
+
+    @classmethod
+    def from_cabinet_spec(
+        cls, spec: CabinetSpec, config: SceneConfig | None = None, workdir: Path | None = None
+    ) -> ManipulationWorld:
+        """The scene of ``config`` (default: the built-in one) with the cabinet ``spec``
+        instead of a generated one, e.g. a *planning world* for a believed cabinet
+        (a belief particle: see :func:`strug_manip.control.controllers.believed_spec`).
+
+        Raises:
+            ConfigError: ``spec`` is not a :class:`CabinetSpec`, or ``config`` names a
+                cabinet folder.
+        """
+        base = config or SceneConfig()
+        if base.cabinet_folder is not None:
+            raise ConfigError("a world from a cabinet spec cannot also load cabinet_folder")
+        kw = {f: getattr(base, f) for f in base.__dataclass_fields__}
+        kw["cabinet_spec"] = spec
+        return cls(SceneConfig(**kw), workdir)
 
     # --- state -------------------------------------------------------------------------
     def reset(self, part_positions: dict[str, float] | None = None) -> None:
@@ -136,6 +161,41 @@ class ManipulationWorld:
         if full not in self.part_joints:
             raise UnknownNameError("cabinet joint", name, self.part_joints)
         self.data.qpos[m.jnt_qposadr[m.joint(full).id]] = q
+
+    def copy_robot_state(self, source: ManipulationWorld, include_object: bool = True) -> None:
+        """Copy the robot's joint positions [m, rad] and velocities [m/s, rad/s] (and the
+        object's pose and twist if ``include_object``) from ``source``, matching joints
+        by NAME (the two models may order their coordinates differently); the cabinet
+        (base pose and parts) keeps this world's state. Then update the kinematics.
+
+        Raises:
+            UnknownNameError: a robot joint of ``source`` is missing here.
+        """
+        if source is self:
+            return
+        dst_m, dst_d = self.model, self.data
+        src_m, src_d = source.model, source.data
+        names = list(source.robot_joints) + ([OBJECT_JOINT] if include_object else [])
+        all_names = [dst_m.joint(j).name for j in range(dst_m.njnt)]
+        for name in names:
+            jd = mujoco.mj_name2id(dst_m, mujoco.mjtObj.mjOBJ_JOINT, name)
+            js = mujoco.mj_name2id(src_m, mujoco.mjtObj.mjOBJ_JOINT, name)
+            if jd < 0:
+                raise UnknownNameError("joint of the destination world", name, all_names)
+            if js < 0:
+                continue
+            nq = {0: 7, 1: 4}.get(int(src_m.jnt_type[js]), 1)  # free, ball, slide/hinge
+            nv = {0: 6, 1: 3}.get(int(src_m.jnt_type[js]), 1)
+            qa, qb = dst_m.jnt_qposadr[jd], src_m.jnt_qposadr[js]
+            va, vb = dst_m.jnt_dofadr[jd], src_m.jnt_dofadr[js]
+            dst_d.qpos[qa : qa + nq] = src_d.qpos[qb : qb + nq]
+            dst_d.qvel[va : va + nv] = src_d.qvel[vb : vb + nv]
+        mujoco.mj_kinematics(dst_m, dst_d)
+
+    def robot_qpos(self) -> dict[str, float]:
+        """Every robot joint's position [m or rad], by joint name."""
+        m, d = self.model, self.data
+        return {n: float(d.qpos[m.jnt_qposadr[m.joint(n).id]]) for n in self.robot_joints}
 
     def step(self, seconds: float) -> None:
         """Advance physics by ``seconds`` of simulated time (whole steps)."""
