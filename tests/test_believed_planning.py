@@ -203,13 +203,13 @@ def test_plans_against_the_believed_door_and_executes_in_the_true_drawer(
         assert data.qpos.shape == (door_belief.model.nq,)
         return plan(self, q_start, q_goal, data, **kw)
 
-    class SpyChecker(controllers._CollisionChecker):
+    class SpyChecker(controllers.PathCollisionChecker):
         def __init__(self, world: ManipulationWorld, base: np.ndarray) -> None:
             check_models.append(world.model)
             super().__init__(world, base)
 
     monkeypatch.setattr(ArmMotionPlanner, "plan", spy_plan)
-    monkeypatch.setattr(controllers, "_CollisionChecker", SpyChecker)
+    monkeypatch.setattr(controllers, "PathCollisionChecker", SpyChecker)
     g, door = _door_belief(truth)
     door_belief.reset()
     out = OpenDrawer(g, door, travel=0.8).run(truth, plan_world=door_belief)

@@ -70,9 +70,9 @@ from strug_manip.world.scripted import (
     SETTLE_TIME,
     UNTUCK_ARM,
     UNTUCK_TORSO,
-    _CollisionChecker,
-    _Driver,
-    _flip_fingers,
+    JointDriver,
+    PathCollisionChecker,
+    flip_fingers,
     grasp_rotation,
     solve_ik,
 )
@@ -413,7 +413,7 @@ def handle_grasp(world: ManipulationWorld, link: str, flip: bool = False) -> np.
     front = T[:3, :3] @ np.array([1.0, 0.0, 0.0])  # the cabinet's front normal
     bar = T[:3, :3] @ part.handle_axis if part.handle == "bar" else None
     R = grasp_rotation(-front, bar)
-    out[:3, :3] = _flip_fingers(R) if flip else R
+    out[:3, :3] = flip_fingers(R) if flip else R
     return out
 
 
@@ -425,7 +425,7 @@ class _RunFailureError(Exception):
         self.reason, self.detail = reason, detail
 
 
-class _Recorder(_Driver):
+class _Recorder(JointDriver):
     """The scripted driver, recording the measured trajectory and physics wall time."""
 
     def __init__(self, world: ManipulationWorld, kin: FetchKinematics, t_end: float) -> None:
@@ -678,7 +678,7 @@ class _Run:
         (with the base at ``base``, default its target)."""
         t = time.perf_counter()
         where = self.base if base is None else base
-        hits = _CollisionChecker(self.sync_plan(), where).path(qs, allowed)
+        hits = PathCollisionChecker(self.sync_plan(), where).path(qs, allowed)
         self.plan_time += time.perf_counter() - t
         if hits:
             raise _RunFailureError("collision", f"the planned path touches {hits[0]}")
@@ -823,7 +823,7 @@ def _grasp_and_move(
         last: _RunFailureError | None = None
         plan = None
         for flip in (False, True):
-            R = _flip_fingers(g[:3, :3]) if flip else g[:3, :3]
+            R = flip_fingers(g[:3, :3]) if flip else g[:3, :3]
             gg, pp = g.copy(), pre.copy()
             gg[:3, :3] = pp[:3, :3] = R
             mv = [T.copy() for T in poses]

@@ -76,7 +76,7 @@ BASE_GAIN = 3.0
 BASE_MAX_SPEED = 0.3
 #: Shortest duration of a joint-space segment [s] and Cartesian speeds [m/s]. Every
 #: segment is also slowed so that no joint exceeds :data:`SPEED_FRACTION` of its speed
-#: limit (see :class:`_Driver`).
+#: limit (see :class:`JointDriver`).
 SEGMENT_TIME = 1.0
 APPROACH_SPEED = 0.08
 PULL_SPEED = 0.10
@@ -183,7 +183,7 @@ def grasp_rotation(approach: np.ndarray, bar_axis: np.ndarray | None) -> np.ndar
     return np.column_stack([a, y, np.cross(a, y)])
 
 
-def _flip_fingers(R: np.ndarray) -> np.ndarray:
+def flip_fingers(R: np.ndarray) -> np.ndarray:
     """The same grasp with the fingers swapped (a half turn about the approach axis)."""
     return np.column_stack([R[:, 0], -R[:, 1], -R[:, 2]])
 
@@ -255,7 +255,7 @@ def solve_ik(
 # --- the driver -------------------------------------------------------------------------
 
 
-class _Driver:
+class JointDriver:
     """Sends actuator commands to the Fetch while stepping physics.
 
     The base is held at ``base_target`` (x [m], y [m], yaw [rad]) by a saturated
@@ -437,7 +437,7 @@ def choose_drawer(world: ManipulationWorld) -> PartSpec:
     return scored[0][2]
 
 
-class _CollisionChecker:
+class PathCollisionChecker:
     """Robot contacts at kinematic configurations, on a scratch copy of the world's state.
 
     Contacts between the fingers and ``allowed`` bodies (the drawer being grasped) are
@@ -554,7 +554,7 @@ def open_drawer_scripted(
     kin = FetchKinematics()
     lim = kin.joint_limits()
     limits = [(lim[j][0] + 0.01, lim[j][1] - 0.01) for j in IK_JOINTS]
-    drv = _Driver(world, kin)
+    drv = JointDriver(world, kin)
 
     # --- (a) where the base goes ---------------------------------------------------------
     base = drv.base
@@ -568,7 +568,7 @@ def open_drawer_scripted(
         along = float((shoulder[:2] - handle[:2]) @ flat)  # shoulder to handle [m]
         base[:2] += (REACH - along) * flat
     q_fixed = dict(zip(BASE_JOINTS, base.tolist(), strict=True))
-    checker = _CollisionChecker(world, base)
+    checker = PathCollisionChecker(world, base)
 
     # --- (b) IK: pre-grasp, approach and pull lines, collision checked ---------------------
     pre = handle + PREGRASP_OFFSET * opening
@@ -590,7 +590,7 @@ def open_drawer_scripted(
 
     failures: list[str] = []
     plan = None
-    for R in (R_grasp, _flip_fingers(R_grasp)):
+    for R in (R_grasp, flip_fingers(R_grasp)):
         torso = UNTUCK_TORSO
         untuck = [np.array([torso, *a]) for a in UNTUCK_ARM]
         q_pre, ep, er = solve_ik(
