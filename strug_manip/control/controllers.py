@@ -935,8 +935,39 @@ def _check_travel(name: str, value: float) -> float:
     return float(value)
 
 
+#: Least part motion [m or rad] that counts as a probe (Push, PullV, PullH) moving it.
+PROBE_MIN_MOTION = 0.005
+
+
+class _GraspAndMove:
+    """Shared ``run`` of the controllers that grasp at ``g`` and move the gripper.
+
+    A subclass gives ``g`` (a dataclass field) and :meth:`motion`: the gripper path as a
+    function of the grasp pose, and the least part motion that counts as success.
+    """
+
+    g: np.ndarray
+
+    def motion(self) -> tuple[Callable[[np.ndarray], tuple[list[np.ndarray], float]], float]:
+        raise NotImplementedError
+
+    def run(
+        self,
+        world: ManipulationWorld,
+        seed: int = 0,
+        observer: Observer | None = None,
+        plan_world: ManipulationWorld | None = None,
+    ) -> Outcome:
+        """Execute in ``world`` (see the class docstring), collision checks and motion
+        plans against ``plan_world`` (default ``world``; e.g. the believed cabinet)."""
+        path, min_motion = self.motion()
+        return _grasp_and_move(
+            world, self.g, path, seed, observer, min_motion=min_motion, plan_world=plan_world
+        )
+
+
 @dataclass(frozen=True)
-class OpenDrawer:
+class OpenDrawer(_GraspAndMove):
     """Grasp at ``g`` and pull straight along the believed prismatic axis.
 
     Attributes:
@@ -953,29 +984,16 @@ class OpenDrawer:
     joint: BelievedJoint
     travel: float = DRAWER_TRAVEL
 
-    def run(
-        self,
-        world: ManipulationWorld,
-        seed: int = 0,
-        observer: Observer | None = None,
-        plan_world: ManipulationWorld | None = None,
-    ) -> Outcome:
-        """Execute in ``world`` (see the class docstring), collision checks and motion
-        plans against ``plan_world`` (default ``world``; e.g. the believed cabinet)."""
+    def motion(self) -> tuple[Callable, float]:
         travel = _check_travel("travel", self.travel)
-        return _grasp_and_move(
-            world,
-            self.g,
+        return (
             _opening_motion(self.joint, travel),
-            seed,
-            observer,
-            min_motion=OPEN_FRACTION * min(travel, self.joint.limit),
-            plan_world=plan_world,
+            OPEN_FRACTION * min(travel, self.joint.limit),
         )
 
 
 @dataclass(frozen=True)
-class OpenDoor:
+class OpenDoor(_GraspAndMove):
     """Grasp at ``g`` and swing the gripper on an arc about the believed hinge.
 
     Attributes:
@@ -991,25 +1009,9 @@ class OpenDoor:
     joint: BelievedJoint
     angle: float = DOOR_ANGLE
 
-    def run(
-        self,
-        world: ManipulationWorld,
-        seed: int = 0,
-        observer: Observer | None = None,
-        plan_world: ManipulationWorld | None = None,
-    ) -> Outcome:
-        """Execute in ``world`` (see the class docstring), collision checks and motion
-        plans against ``plan_world`` (default ``world``; e.g. the believed cabinet)."""
+    def motion(self) -> tuple[Callable, float]:
         angle = _check_travel("angle", self.angle)
-        return _grasp_and_move(
-            world,
-            self.g,
-            _opening_motion(self.joint, angle),
-            seed,
-            observer,
-            min_motion=OPEN_FRACTION * min(angle, self.joint.limit),
-            plan_world=plan_world,
-        )
+        return _opening_motion(self.joint, angle), OPEN_FRACTION * min(angle, self.joint.limit)
 
 
 def _probe(direction: Callable[[np.ndarray], np.ndarray]) -> Callable:
@@ -1020,63 +1022,31 @@ def _probe(direction: Callable[[np.ndarray], np.ndarray]) -> Callable:
 
 
 @dataclass(frozen=True)
-class Push:
+class Push(_GraspAndMove):
     """Grasp the part at ``g`` and push :data:`PROBE_DISTANCE` along
     the approach direction. Success: the part moved by more than 5 mm or mrad."""
 
     g: np.ndarray
 
-    def run(
-        self,
-        world: ManipulationWorld,
-        seed: int = 0,
-        observer: Observer | None = None,
-        plan_world: ManipulationWorld | None = None,
-    ) -> Outcome:
-        """Execute in ``world`` (see the class docstring), collision checks and motion
-        plans against ``plan_world`` (default ``world``; e.g. the believed cabinet)."""
-        return _grasp_and_move(
-            world,
-            self.g,
-            _probe(lambda g: g[:3, 0]),
-            seed,
-            observer,
-            min_motion=0.005,
-            plan_world=plan_world,
-        )
+    def motion(self) -> tuple[Callable, float]:
+        return _probe(lambda g: g[:3, 0]), PROBE_MIN_MOTION
 
 
 @dataclass(frozen=True)
-class PullV:
+class PullV(_GraspAndMove):
     """Grasp at ``g`` and pull :data:`PROBE_DISTANCE` vertically (world +z; ``down``
     for -z). Success: the part moved by more than 5 mm or mrad."""
 
     g: np.ndarray
     down: bool = False
 
-    def run(
-        self,
-        world: ManipulationWorld,
-        seed: int = 0,
-        observer: Observer | None = None,
-        plan_world: ManipulationWorld | None = None,
-    ) -> Outcome:
-        """Execute in ``world`` (see the class docstring), collision checks and motion
-        plans against ``plan_world`` (default ``world``; e.g. the believed cabinet)."""
-        sign = -1.0 if self.down else 1.0
-        return _grasp_and_move(
-            world,
-            self.g,
-            _probe(lambda g: np.array([0.0, 0.0, sign])),
-            seed,
-            observer,
-            min_motion=0.005,
-            plan_world=plan_world,
-        )
+    def motion(self) -> tuple[Callable, float]:
+        up = np.array([0.0, 0.0, -1.0 if self.down else 1.0])
+        return _probe(lambda g: up), PROBE_MIN_MOTION
 
 
 @dataclass(frozen=True)
-class PullH:
+class PullH(_GraspAndMove):
     """Grasp at ``g`` and pull :data:`PROBE_DISTANCE` horizontally out of the cabinet
     (against the approach, made horizontal; ``sideways`` pulls along the horizontal
     direction perpendicular to it instead, z x pull). Success: the part
@@ -1085,16 +1055,7 @@ class PullH:
     g: np.ndarray
     sideways: bool = False
 
-    def run(
-        self,
-        world: ManipulationWorld,
-        seed: int = 0,
-        observer: Observer | None = None,
-        plan_world: ManipulationWorld | None = None,
-    ) -> Outcome:
-        """Execute in ``world`` (see the class docstring), collision checks and motion
-        plans against ``plan_world`` (default ``world``; e.g. the believed cabinet)."""
-
+    def motion(self) -> tuple[Callable, float]:
         def direction(g: np.ndarray) -> np.ndarray:
             a = -g[:3, 0].copy()
             a[2] = 0.0
@@ -1103,15 +1064,7 @@ class PullH:
                 a = np.cross([0.0, 0.0, 1.0], a)
             return a
 
-        return _grasp_and_move(
-            world,
-            self.g,
-            _probe(direction),
-            seed,
-            observer,
-            min_motion=0.005,
-            plan_world=plan_world,
-        )
+        return _probe(direction), PROBE_MIN_MOTION
 
 
 # --- pick and place ------------------------------------------------------------------------
