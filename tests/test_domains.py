@@ -8,7 +8,15 @@ import numpy as np
 import pytest
 
 from strug_manip.domains import make_domain
-from strug_manip.domains.tiger import HEAR_NOTHING, LISTEN, OPEN_LEFT, OPEN_RIGHT
+from strug_manip.domains.tiger import (
+    HEAR_LEFT,
+    HEAR_NOTHING,
+    HEAR_RIGHT,
+    LISTEN,
+    OPEN_LEFT,
+    OPEN_RIGHT,
+    Tiger,
+)
 
 
 def test_tiger_constants() -> None:
@@ -104,3 +112,29 @@ def test_continuous_obs_loglik_is_the_sampling_density(name: str) -> None:
     std = obs.std(axis=0)
     entropy = float(np.sum(0.5 * np.log(2 * math.pi * math.e * std**2)))
     assert abs(mean_ll + entropy) < 0.05
+
+
+def test_tiger_optimal_values_by_backward_induction() -> None:
+    tiger, extended = make_domain("tiger"), make_domain("extendedtiger")
+    assert tiger.optimal_value() == pytest.approx(5.673, abs=1e-3)  # the belief-grid value
+    assert tiger.optimal_value(1.0) == 10.0 and tiger.optimal_value(0.0) == 10.0
+    # ExtendedTiger: three paid listens first, then at best Tiger with 7 steps left.
+    g = extended.discount
+    short = Tiger()
+    short.max_steps = 7
+    upper = -(1 + g + g * g) + g**3 * short.optimal_value()
+    assert extended.optimal_value() == pytest.approx(upper)  # listening first is optimal here
+    assert extended.optimal_value() == pytest.approx(2.010, abs=1e-3)
+    # No policy does better: "listen 5 times, open the door the majority says is safe".
+    rng = np.random.default_rng(0)
+    returns = []
+    for _ in range(20_000):
+        s, total, disc, votes = extended.sample_initial_state(rng), 0.0, 1.0, 0
+        for _ in range(5):
+            s, o, r, _ = extended.step(s, LISTEN, rng)
+            total, disc = total + disc * r, disc * g
+            votes += {HEAR_LEFT: 1, HEAR_RIGHT: -1}.get(o, 0)
+        total += disc * extended.step(s, OPEN_RIGHT if votes > 0 else OPEN_LEFT, rng).reward
+        returns.append(total)
+    assert np.mean(returns) < extended.optimal_value() + 3 * np.std(returns) / np.sqrt(20_000)
+    assert make_domain("tigerclassic").optimal_value() > 0.0

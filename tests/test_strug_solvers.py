@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Hashable
 
 import numpy as np
 import pytest
@@ -87,3 +88,72 @@ def test_most_likely_state() -> None:
     ld = make_domain("lightdark1d")
     b = ParticleBelief.from_states([0.0, 1.0, 2.0, 10.0], [0.3, 0.3, 0.3, 0.1])
     assert most_likely_state(ld, b) == 2.0  # nearest to the weighted mean 1.9
+
+
+def test_a_solved_child_competes_without_exploration() -> None:
+    from planners.solvers.action_tree import ActionTree
+    from planners.solvers.base import UniformStream
+
+    tiger = make_domain("tiger")
+    rng = np.random.default_rng(0)
+    tree = ActionTree(tiger.action_space(), "all", 1.0, 0.0, 10.0, rng, UniformStream(rng))
+    tree.add_belief_node()
+    assert tree.select(0, 0)[0] == 0  # first call creates the three children
+    listen, left, right = 0, 1, 2
+    for node, q in ((listen, -1.0), (left, 1.0), (right, 0.0)):
+        tree.update(node, -1, q)
+    # Unsolved, the rarely tried doors would win on exploration; solved, only their value counts.
+    for _ in range(50):
+        tree.update(listen, -1, -1.0)
+    assert tree.select(0, 53)[0] in (left, right)
+    tree.mark_solved(left)
+    tree.mark_solved(right)
+    assert tree.select(0, 53)[0] == listen  # -1 + 10 sqrt(ln 53 / 51) = 1.79 > 1
+    for _ in range(10_000):
+        tree.update(listen, -1, -1.0)
+    assert tree.select(0, 10_053)[0] == left  # the best solved value, once listening is known bad
+
+
+def test_terminal_actions_are_solved_and_the_budget_goes_to_listening() -> None:
+    """ExtendedTiger's doors end the episode: after one visit each their value is exact."""
+    et = make_domain("extendedtiger")
+    belief = et.initial_belief(np.random.default_rng(4), 1000)
+
+    def door_visits(mode: str) -> tuple[Hashable, int]:
+        planner = STRUGConfig(sims=2000, solve_terminal=mode).planner(et)
+        action, info = planner.act(belief, np.random.default_rng(5))
+        assert sum(info.visits) == 2000
+        return action, sum(v for a, v in zip(info.actions, info.visits, strict=True) if a != LISTEN)
+
+    action, visits = door_visits("auto")  # the default: discrete observations are solved
+    assert action == LISTEN and visits <= 20  # one visit per door, the rest to listening
+    assert door_visits("never")[1] > 100  # plain UCB keeps trying the doors
+
+
+def test_solve_terminal_is_validated() -> None:
+    from planners.errors import ConfigError
+
+    with pytest.raises(ConfigError, match="solve_terminal must be one of auto, always, never"):
+        STRUGConfig(solve_terminal="yes")
+
+
+def test_hpw_solves_a_parameterless_terminal_schema() -> None:
+    ld = make_domain("lightdark2d")
+    rng = np.random.default_rng(5)
+    states = [ld.sample_initial_state(rng) for _ in range(16)]
+    result = belief_tree_search(
+        ld,
+        STRUGConfig(sims=800, solve_terminal="always"),
+        states,
+        np.ones(16),
+        rng,
+        node_value=None,
+        beta=0.0,
+    )
+    tree, first = result.tree, result.tree.b_schema_first[0]
+    schemas = range(first, first + tree.n_schemas)
+    stop = next(j for j in schemas if tree.space.schemas[j - first].dim == 0)
+    move = next(j for j in schemas if j != stop)
+    assert tree.s_solved[stop] and not tree.s_solved[move]
+    assert tree.a_solved[tree.s_children[stop][0]]
+    assert tree.s_n[stop] < tree.s_n[move]

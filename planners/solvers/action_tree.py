@@ -17,7 +17,10 @@ next. Three answers, chosen by a config's ``widening`` field:
 * ``"auto"``: ``"all"`` on a finite action space, else the solver's default.
 
 UCB is ``Q + c sqrt(log N / n)`` with unvisited children tried first, in order
-(POMCPOW.jl's ``MaxUCB``). Storage is flat lists indexed by node id.
+(POMCPOW.jl's ``MaxUCB``). A child marked *solved* (:meth:`ActionTree.mark_solved`)
+competes with its value alone, without the exploration term: its value is known
+exactly, so visiting it again cannot teach anything (MCTS-Solver, Winands, Bjornsson &
+Saito 2008). Storage is flat lists indexed by node id.
 """
 
 from __future__ import annotations
@@ -55,6 +58,7 @@ class ActionTree:
         a_n: visits per action node.
         a_q: value estimate per action node.
         a_action: the action of each action node.
+        a_solved: per action node, True once its value is known exactly.
         b_children: action-node ids per belief node (all schemas).
     """
 
@@ -77,12 +81,15 @@ class ActionTree:
         self.a_n: list[int] = []
         self.a_q: list[float] = []
         self.a_action: list[Hashable] = []
+        self.a_solved: list[bool] = []
         self.b_children: list[list[int]] = []
         self._lookup: dict[tuple[int, Hashable], int] = {}
         # HPW: schema nodes (one per belief node and schema), contiguous per belief node.
         self.s_n: list[int] = []
         self.s_q: list[float] = []
         self.s_children: list[list[int]] = []
+        self.s_solved: list[bool] = []
+        self.s_owner: list[int] = []
         self.b_schema_first: list[int] = []
 
     def add_belief_node(self) -> None:
@@ -99,17 +106,30 @@ class ActionTree:
             self.a_n.append(0)
             self.a_q.append(0.0)
             self.a_action.append(a)
+            self.a_solved.append(False)
         return node
 
+    def mark_solved(self, anode: int, snode: int = -1) -> None:
+        """Declare the value of ``anode`` exact: UCB stops adding exploration to it.
+
+        A schema node (HPW) is solved with it when the schema has no parameters, since
+        that action node is then the schema's only child.
+        """
+        self.a_solved[anode] = True
+        if snode >= 0:
+            first = self.b_schema_first[self.s_owner[snode]]
+            if self.space.schemas[snode - first].dim == 0:
+                self.s_solved[snode] = True
+
     def _ucb(self, children: list[int], n_parent: int) -> int:
-        a_n, a_q, c = self.a_n, self.a_q, self.c
+        a_n, a_q, solved, c = self.a_n, self.a_q, self.a_solved, self.c
         logn = math.log(n_parent) if n_parent > 0 else 0.0
         best, best_v = children[0], -math.inf
         for j in children:
             n = a_n[j]
             if n == 0:
                 return j
-            v = a_q[j] + c * math.sqrt(logn / n)
+            v = a_q[j] if solved[j] else a_q[j] + c * math.sqrt(logn / n)
             if v > best_v:
                 best_v, best = v, j
         return best
@@ -141,8 +161,10 @@ class ActionTree:
                 self.s_n.append(0)
                 self.s_q.append(0.0)
                 self.s_children.append([])
+                self.s_solved.append(False)
+                self.s_owner.append(h)
         # 1) UCB over the discrete schema choice.
-        s_n, s_q, c = self.s_n, self.s_q, self.c
+        s_n, s_q, s_solved, c = self.s_n, self.s_q, self.s_solved, self.c
         snode = -1
         logn = math.log(n_h) if n_h > 0 else 0.0
         best_v = -math.inf
@@ -151,7 +173,7 @@ class ActionTree:
             if n == 0:
                 snode = j
                 break
-            v = s_q[j] + c * math.sqrt(logn / n)
+            v = s_q[j] if s_solved[j] else s_q[j] + c * math.sqrt(logn / n)
             if v > best_v:
                 best_v, snode = v, j
         schema = snode - first

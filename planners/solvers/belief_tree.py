@@ -42,6 +42,9 @@ from planners.solvers.base import Budget, SearchInfo, TreeSearchConfig, UniformS
 #: Leaf estimators of a new belief node.
 ROLLOUTS = ("random", "plan")
 
+#: Where terminal actions are solved (see ``BeliefTreeConfig.solve_terminal``).
+SOLVE_TERMINAL = ("auto", "always", "never")
+
 #: A belief-dependent node value: ``value(states, weights)`` with weights shape ``(M,)``.
 NodeValue = Callable[[list[Any], np.ndarray], float]
 
@@ -65,6 +68,19 @@ class BeliefTreeConfig(TreeSearchConfig):
         alpha_obs: observation widening exponent in [0, 1] (default 1/15).
         widening: ``"auto"`` (default: HPW on hybrid action spaces, every action on
             finite ones), ``"all"``, ``"dpw"`` or ``"hpw"``.
+        solve_terminal: when to mark an action *solved* once it has ended the episode for
+            every particle of its node. Its value, the belief-expected reward over the
+            node's M particles, is then final: with discrete observations a revisit returns
+            the very child it created, whose stored reward cannot change. So UCB gives it
+            no exploration term and the budget goes to the actions still uncertain
+            (MCTS-Solver, Winands et al. 2008). ``"auto"`` (default): on domains with
+            discrete observations; ``"always"``; ``"never"`` (plain UCB everywhere). With
+            continuous observations a revisit makes a new child from a fresh propagation,
+            so ``"auto"`` keeps exploring there. Measured (100 seeds, README): solving is
+            what lets the search find ExtendedTiger's chain of paid, uninformative listens,
+            since exploring the exactly known doors at every level dilutes the chain's
+            mean backups; ``"always"`` lowered STRUG on LightDark2D from 3.57 to 1.99.
+            With stochastic rewards the first M-particle estimate is kept.
         rollout: leaf estimate of a new node: ``"random"`` (uniform random actions from
             one particle drawn by weight) or ``"plan"`` (draw two particles i, j by
             weight and execute i's uncertainty-free plan, ``pomdp.plan_for``, from j:
@@ -81,10 +97,16 @@ class BeliefTreeConfig(TreeSearchConfig):
     alpha_obs: float = 1.0 / 15.0
     widening: str = "auto"
     rollout: str = "random"
+    solve_terminal: str = "auto"
 
     def __post_init__(self) -> None:
         super().__post_init__()
         check_positive_int("particles", self.particles)
+        if self.solve_terminal not in SOLVE_TERMINAL:
+            raise ConfigError(
+                f"solve_terminal must be one of {', '.join(SOLVE_TERMINAL)}, "
+                f"got {self.solve_terminal!r}"
+            )
         if self.rollout not in ROLLOUTS:
             raise ConfigError(f"rollout must be one of {', '.join(ROLLOUTS)}, got {self.rollout!r}")
         check_positive_float("beta", self.beta, allow_zero=True)
@@ -203,6 +225,9 @@ def belief_tree_search(
     rollout_actions = list(space.discretized) if widening == "all" else None
     m = len(root_states)
     with_bonus = node_value is not None and beta > 0.0
+    solve_terminal = config.solve_terminal == "always" or (
+        config.solve_terminal == "auto" and discrete_obs
+    )
 
     b_n: list[int] = []
     b_states: list[list[Any]] = []
@@ -249,15 +274,16 @@ def belief_tree_search(
 
     transition_many, loglik_many = pomdp.transition_many, pomdp.obs_loglik_many
 
-    def expand(h: int, anode: int) -> tuple[int, bool]:
-        """The child of ``(h, a)`` reached by one observation; True if it is new."""
+    def expand(h: int, anode: int) -> tuple[int, bool, bool]:
+        """The child of ``(h, a)`` reached by one observation; True if it is new; True if
+        the action ended the episode for every particle it propagated."""
         a = a_action[anode]
         states, w, alive_h = b_states[h], b_w[h], b_alive[h]
         j = draw(h)
         sj, o, rj, done_j = step(states[j], a, rng)
         key = (anode, o) if discrete_obs else None
         if key is not None and key in obs_lookup:
-            return obs_lookup[key], False
+            return obs_lookup[key], False, False
         # Propagate the other live, weighted particles (weightless or terminal ones stay).
         idx = [i for i, wi in enumerate(w.tolist()) if wi > 0.0 and alive_h[i] and i != j]
         nxt, rew, done = transition_many([states[i] for i in idx], a, rng)
@@ -281,7 +307,7 @@ def belief_tree_search(
         child = add_node(new_states, w_new, alive, reward, h)
         if key is not None:
             obs_lookup[key] = child
-        return child, True
+        return child, True, bool(done.all())
 
     plan_for = getattr(pomdp, "plan_for", None) if config.rollout == "plan" else None
 
@@ -316,8 +342,10 @@ def belief_tree_search(
             a_generated.append([])
         generated = a_generated[anode]
         if len(generated) <= k_o * a_n[anode] ** al_o:
-            child, new = expand(h, anode)
+            child, new, ends_all = expand(h, anode)
             generated.append(child)
+            if ends_all and solve_terminal:
+                tree.mark_solved(anode, snode)
         else:
             child, new = generated[int(u() * len(generated))], False
         total = reward_weight * b_reward[child] + b_bonus[child]

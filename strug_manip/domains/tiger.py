@@ -7,6 +7,7 @@ Observations: ``0`` hear the tiger on the left, ``1`` on the right, ``2`` nothin
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Hashable
 from typing import Any
@@ -44,6 +45,7 @@ class Tiger(GenerativePOMDP):
     discrete_observations = True
 
     listen_reward = -1.0
+    opening_ends = True
     tiger_reward = -10.0
     treasure_reward = 10.0
     accuracy = 0.85
@@ -90,6 +92,41 @@ class Tiger(GenerativePOMDP):
         p_left = float(belief.weights[np.asarray(belief.states) == 0].sum())
         return f"P(tiger left)={p_left:.3f}"
 
+    def optimal_value(self, p_left: float = 0.5) -> float:
+        """The exact optimal expected discounted return from ``P(tiger left) = p_left``.
+
+        Backward induction over the exact beliefs reachable in ``max_steps`` steps (at
+        most ``2 ** max_steps`` of them): the best any solver can do in expectation, the
+        yardstick for a Table I column.
+        """
+        return _tiger_optimum(self, float(p_left), uninformative_listens=0)
+
+
+def _tiger_optimum(domain: Tiger, p_left: float, uninformative_listens: int) -> float:
+    gamma, acc = domain.discount, domain.accuracy
+    best_door = max(domain.treasure_reward, domain.tiger_reward)
+    worst_door = min(domain.treasure_reward, domain.tiger_reward)
+
+    @functools.cache
+    def value(p: float, listens: int, t: int) -> float:
+        if t >= domain.max_steps:
+            return 0.0
+        q = max(p, 1.0 - p)  # open the door the tiger is less likely behind
+        open_value = q * best_door + (1.0 - q) * worst_door
+        if not domain.opening_ends:  # TigerClassic: the tiger is placed anew, p = 0.5
+            open_value += gamma * value(0.5, 0, t + 1)
+        listens = min(listens + 1, uninformative_listens + 1)
+        if listens <= uninformative_listens:
+            future = value(p, listens, t + 1)
+        else:
+            hear_left = p * acc + (1.0 - p) * (1.0 - acc)
+            future = hear_left * value(p * acc / hear_left, listens, t + 1) + (
+                1.0 - hear_left
+            ) * value(p * (1.0 - acc) / (1.0 - hear_left), listens, t + 1)
+        return max(open_value, domain.listen_reward + gamma * future)
+
+    return value(p_left, 0, 0)
+
 
 class TigerClassic(Tiger):
     """The classic Tiger every other library ships (Kaelbling et al. 1998).
@@ -102,6 +139,7 @@ class TigerClassic(Tiger):
 
     name = "tigerclassic"
     max_abs_reward = 100.0
+    opening_ends = False
     tiger_reward = -100.0
 
     def step(self, s: int, a: Hashable, rng: np.random.Generator) -> Step:
@@ -171,6 +209,11 @@ class ExtendedTiger(Tiger):
                 return -math.inf
             return self._log_acc if o == tiger else self._log_err
         return 0.0 if o == HEAR_NOTHING else -math.inf
+
+    def optimal_value(self, p_left: float = 0.5) -> float:
+        """The exact optimal expected discounted return from ``P(tiger left) = p_left``
+        and no listens yet (backward induction, as :meth:`Tiger.optimal_value`)."""
+        return _tiger_optimum(self, float(p_left), self.listens_required)
 
     def summarize_belief(self, belief: ParticleBelief) -> str:
         tigers = np.array([s[0] for s in belief.states])
