@@ -2,7 +2,7 @@
 
 Usage::
 
-    python tools/render_perception_data.py --seeds 100000:100500 --out data/perception/train
+    python tools/render_perception_data.py --seeds 100000:100400 --out data/perception/train
     python tools/render_perception_data.py --seeds 0:100 --out data/perception/test \
         --picture docs/perception_data.png
 
