@@ -57,6 +57,42 @@ def pixel_points(depth: np.ndarray, fovy: float) -> np.ndarray:
     return np.stack([u * d / f, -v * d / f, -d], axis=-1)
 
 
+def view_targets(
+    part_map: np.ndarray,
+    joint_type: np.ndarray,
+    axis_cam: np.ndarray,
+    origin_cam: np.ndarray,
+    depth: np.ndarray,
+    fovy: float,
+    stride: int = 2,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Training targets of one labelled view at the network's resolution.
+
+    Args:
+        part_map: (H, W) part index per pixel (-1 background, 0 carcass, k part k).
+        joint_type: (P,) 0 fixed, 1 prismatic, 2 revolute.
+        axis_cam, origin_cam: (P, 3) joint axes and origins, camera frame [m].
+        depth: (H, W) depth [m]; fovy: vertical field of view [rad].
+        stride: subsampling, as in :func:`prepare_input`.
+
+    Returns:
+        ``(classes (h, w) int64, axis (3, h, w), hinge offset (3, h, w) [m],
+        points (h, w, 3) [m])``, float32 where not integer; axis and offset are only
+        meaningful on drawer and door pixels.
+    """
+    pm = part_map[::stride, ::stride].astype(np.int64)
+    points = pixel_points(depth, fovy)[::stride, ::stride]
+    part = np.clip(pm - 1, 0, None)
+    axis = axis_cam[part].transpose(2, 0, 1)
+    offset = (origin_cam[part] - points).transpose(2, 0, 1)
+    return (
+        class_targets(pm, joint_type),
+        axis.astype(np.float32),
+        offset.astype(np.float32),
+        points.astype(np.float32),
+    )
+
+
 def prepare_input(rgb: np.ndarray, depth: np.ndarray, stride: int = 2) -> np.ndarray:
     """Network input (4, H/stride, W/stride) float32 from RGB (H, W, 3) uint8 and depth [m].
 

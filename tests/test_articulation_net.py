@@ -18,6 +18,7 @@ from perception.articulation_net import (
     extract_parts,
     pixel_points,
     prepare_input,
+    view_targets,
 )
 from strug_manip.world.perception_data import render_cabinet
 from strug_manip.world.sim import depth_to_points
@@ -84,17 +85,11 @@ def test_a_few_training_steps_reduce_the_loss() -> None:
 
     views = render_cabinet(25, views=4)
     x = torch.from_numpy(np.stack([prepare_input(v.rgb, v.depth) for v in views]))
-    cls, axis, off = [], [], []
-    for v in views:
-        pm = v.part_map[::2, ::2].astype(np.int64)
-        pts = pixel_points(v.depth, v.fovy)[::2, ::2]
-        part = np.clip(pm - 1, 0, None)
-        cls.append(class_targets(pm, v.joint_type))
-        axis.append(v.axis_cam[part].transpose(2, 0, 1))
-        off.append((v.origin_cam[part] - pts).transpose(2, 0, 1))
-    cls_t = torch.from_numpy(np.stack(cls))
-    axis_t = torch.from_numpy(np.stack(axis)).float()
-    off_t = torch.from_numpy(np.stack(off)).float()
+    targets = [
+        view_targets(v.part_map, v.joint_type, v.axis_cam, v.origin_cam, v.depth, v.fovy)
+        for v in views
+    ]
+    cls_t, axis_t, off_t = (torch.from_numpy(np.stack([t[i] for t in targets])) for i in range(3))
     # Mirroring twice is the identity; mirroring negates x of axes and offsets.
     twice = flip(*flip(x, cls_t, axis_t, off_t))
     assert all(torch.equal(a, b) for a, b in zip(twice, (x, cls_t, axis_t, off_t), strict=True))

@@ -27,10 +27,9 @@ from torch import nn
 from perception.articulation_net import (
     CLASSES,
     ArticulationNet,
-    class_targets,
     extract_parts,
-    pixel_points,
     prepare_input,
+    view_targets,
 )
 from strug_manip.world.perception_data import load_views
 
@@ -50,20 +49,21 @@ def load_split(folder: Path, stride: int) -> dict[str, np.ndarray]:
     for path in shards:
         d = load_views(path)
         for i in range(len(d["rgb"])):
-            pm = d["part_map"][i][::stride, ::stride].astype(np.int64)
-            pts = pixel_points(d["depth"][i], float(d["fovy"][i]))[::stride, ::stride]
             xs.append(prepare_input(d["rgb"][i], d["depth"][i], stride))
-            cls.append(class_targets(pm, d["joint_type"][i]))
-            part = np.clip(pm - 1, 0, None)
-            axes.append(d["axis_cam"][i][part].transpose(2, 0, 1))
-            offs.append((d["origin_cam"][i][part] - pts).transpose(2, 0, 1))
-            points.append(pts.astype(np.float32))
+            c, a, o, p = view_targets(
+                d["part_map"][i], d["joint_type"][i], d["axis_cam"][i], d["origin_cam"][i],
+                d["depth"][i], float(d["fovy"][i]), stride,
+            )  # fmt: skip
+            cls.append(c)
+            axes.append(a)
+            offs.append(o)
+            points.append(p)
             meta.append((path.name, i))
     return {
         "x": np.stack(xs).astype(np.float32),
         "cls": np.stack(cls),
-        "axis": np.stack(axes).astype(np.float32),
-        "offset": np.stack(offs).astype(np.float32),
+        "axis": np.stack(axes),
+        "offset": np.stack(offs),
         "points": np.stack(points),
         "meta": meta,
     }
