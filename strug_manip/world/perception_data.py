@@ -39,6 +39,7 @@ repeating or losing a finished cabinet.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 from collections.abc import Iterable, Sequence
@@ -49,7 +50,7 @@ import mujoco
 import numpy as np
 
 from planners.errors import ConfigError, check_positive_int
-from strug_manip.robot.fetch import BASE_JOINTS, HEAD_JOINTS, TORSO_JOINT
+from strug_manip.robot.fetch import BASE_JOINTS, HEAD_CAMERA, HEAD_JOINTS, TORSO_JOINT
 from strug_manip.world.scene import SceneConfig
 from strug_manip.world.sim import CameraFrame, ManipulationWorld
 
@@ -197,7 +198,7 @@ class CabinetViewer:
         for _ in range(iterations):
             mujoco.mj_kinematics(m, d)
             mujoco.mj_camlight(m, d)  # camera poses are not part of mj_kinematics
-            T, _ = self.world.camera_pose("head_camera")
+            T, _ = self.world.camera_pose(HEAD_CAMERA)
             to_target = T[:3, :3].T @ (target - T[:3, 3])  # camera frame; ahead is -z
             pan_err = math.atan2(-to_target[0], -to_target[2])
             tilt_err = math.atan2(-to_target[1], math.hypot(to_target[0], to_target[2]))
@@ -213,7 +214,7 @@ class CabinetViewer:
         w = self.world
         w.reset(self._open_parts(rng))
         self._place_robot(rng)
-        return self.label(w.render("head_camera"))
+        return self.label(w.render(HEAD_CAMERA))
 
     def label(self, frame: CameraFrame) -> LabelledView:
         """The labels of ``frame``, rendered from the world's current state."""
@@ -275,10 +276,7 @@ def render_cabinet(
     with ``seed`` draws every view).
     """
     check_positive_int("views", views)
-    base = config or SceneConfig()
-    kw = {f: getattr(base, f) for f in base.__dataclass_fields__}
-    kw["cabinet_seed"] = int(seed)
-    world = ManipulationWorld(SceneConfig(**kw))
+    world = ManipulationWorld(dataclasses.replace(config or SceneConfig(), cabinet_seed=int(seed)))
     try:
         viewer = CabinetViewer(world, ranges)
         rng = np.random.default_rng([int(seed), 0x5EED])

@@ -14,6 +14,7 @@ in the camera frame, with ``f = (H / 2) / tan(fovy / 2)`` [px].
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import tempfile
 from dataclasses import dataclass
@@ -126,9 +127,7 @@ class ManipulationWorld:
         base = config or SceneConfig()
         if base.cabinet_folder is not None:
             raise ConfigError("a world from a cabinet spec cannot also load cabinet_folder")
-        kw = {f: getattr(base, f) for f in base.__dataclass_fields__}
-        kw["cabinet_spec"] = spec
-        return cls(SceneConfig(**kw), workdir)
+        return cls(dataclasses.replace(base, cabinet_spec=spec), workdir)
 
     # --- state -------------------------------------------------------------------------
     def reset(self, part_positions: dict[str, float] | None = None) -> None:
