@@ -22,6 +22,7 @@ from strug_manip.control.controllers import (
     OpenDrawer,
     believed_spec,
     handle_grasp,
+    true_joint,
 )
 from strug_manip.control.motion import ArmMotionPlanner
 from strug_manip.world.scene import SceneConfig
@@ -85,7 +86,7 @@ def test_believed_spec_replaces_one_joint_and_keeps_the_geometry(
     # The believed joint, read back in the world frame, is the one given.
     _, door = _door_belief(truth)
     door_belief.reset()
-    back = BelievedJoint.of_part(door_belief, "link_1")
+    back = true_joint(door_belief, "link_1")
     assert back.type == "revolute"
     np.testing.assert_allclose(back.axis, door.axis, atol=1e-9)
     np.testing.assert_allclose(back.origin, door.origin, atol=1e-9)
@@ -115,7 +116,7 @@ def test_bad_belief_arguments_raise(truth: ManipulationWorld) -> None:
     with pytest.raises(ConfigError):
         SceneConfig(cabinet_spec="cabinet_0003")  # type: ignore[arg-type]
     g, _ = _door_belief(truth)
-    joint = BelievedJoint.of_part(truth, "link_1")
+    joint = true_joint(truth, "link_1")
     with pytest.raises(ConfigError):
         OpenDrawer(g, joint).run(truth, plan_world="belief")  # type: ignore[arg-type]
 
@@ -163,7 +164,7 @@ def test_plan_world_holds_the_robot_state_before_each_plan(
         same_belief.model.jnt_qposadr[same_belief.model.joint("torso_lift_joint").id]
     ] = 0.3
     g = handle_grasp(truth, "link_1")
-    OpenDrawer(g, BelievedJoint.of_part(truth, "link_1")).run(truth, plan_world=same_belief)
+    OpenDrawer(g, true_joint(truth, "link_1")).run(truth, plan_world=same_belief)
     assert seen
     for believed, true in seen:
         assert believed == true
@@ -177,7 +178,7 @@ def test_planning_under_the_true_spec_gives_the_same_outcome(
 ) -> None:
     truth.reset()
     g = handle_grasp(truth, "link_1")
-    joint = BelievedJoint.of_part(truth, "link_1")
+    joint = true_joint(truth, "link_1")
     plain = OpenDrawer(g, joint).run(truth)
     truth.reset()
     same_belief.reset()
@@ -230,7 +231,7 @@ def test_believed_geometry_decides_the_plan(
     opens under the true model, see above); the true cabinet is not touched."""
     truth.reset()
     g = handle_grasp(truth, "link_1")
-    joint = BelievedJoint.of_part(truth, "link_1")
+    joint = true_joint(truth, "link_1")
     same_belief.reset({"joint_1": 0.25})
     out = OpenDrawer(g, joint).run(truth, plan_world=same_belief)
     same_belief.reset()

@@ -26,6 +26,7 @@ from strug_manip.control.controllers import (
     PullV,
     Push,
     handle_grasp,
+    true_joint,
 )
 from strug_manip.world.scene import SceneConfig
 from strug_manip.world.sim import ManipulationWorld
@@ -73,13 +74,13 @@ def _check(out: Outcome) -> None:
 def test_open_drawer_true_model_opens_it(drawers: ManipulationWorld) -> None:
     drawers.reset()
     g = handle_grasp(drawers, "link_1")
-    out = OpenDrawer(g, BelievedJoint.of_part(drawers, "link_1"), travel=0.15).run(drawers)
+    out = OpenDrawer(g, true_joint(drawers, "link_1"), travel=0.15).run(drawers)
     _check(out)
     assert out.success, out.detail
     assert out.part_motion[DRAWER_JOINT] > 0.12
     assert out.cabinet_displacement < 0.03
     assert 0 < out.sim_time < 30
-    assert isinstance(OpenDrawer(g, BelievedJoint.of_part(drawers, "link_1")), Controller)
+    assert isinstance(OpenDrawer(g, true_joint(drawers, "link_1")), Controller)
 
 
 def test_open_drawer_under_a_door_model_fails_or_drags(drawers: ManipulationWorld) -> None:
@@ -96,7 +97,7 @@ def test_open_drawer_under_a_door_model_fails_or_drags(drawers: ManipulationWorl
 def test_open_door_true_model_opens_it(doors: ManipulationWorld) -> None:
     doors.reset()
     g = handle_grasp(doors, "link_1")
-    joint = BelievedJoint.of_part(doors, "link_1")
+    joint = true_joint(doors, "link_1")
     assert joint.type == "revolute"
     out = OpenDoor(g, joint, angle=0.8).run(doors)
     _check(out)
@@ -196,7 +197,7 @@ def test_same_state_and_parameters_give_the_same_outcome(drawers: ManipulationWo
     for _ in range(2):
         drawers.reset()
         g = handle_grasp(drawers, "link_1")
-        outs.append(OpenDrawer(g, BelievedJoint.of_part(drawers, "link_1")).run(drawers, seed=7))
+        outs.append(OpenDrawer(g, true_joint(drawers, "link_1")).run(drawers, seed=7))
         qpos.append(drawers.data.qpos.copy())
     assert outs[0].same_as(outs[1])
     np.testing.assert_array_equal(qpos[0], qpos[1])

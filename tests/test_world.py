@@ -96,3 +96,50 @@ def test_point_cloud_of_a_known_box_matches_its_geometry() -> None:
                     np.linalg.norm(np.maximum(inside, 0), axis=1))  # fmt: skip
     assert np.percentile(dist, 99) < 0.005, np.percentile(dist, [50, 99, 100])
     assert dist.max() < 0.01
+
+
+def test_cabinet_stands_on_its_table_front_behind_the_edge(world) -> None:
+    from strug_manip.world.scene import STAND_HEIGHT, STAND_SETBACK
+
+    world.reset()
+    spec = world.scene.cabinet_spec
+    T = world.body_pose("cabinet/base")
+    assert T[2, 3] == pytest.approx(STAND_HEIGHT)
+    front = T[0, 3] - spec.depth / 2  # the cabinet faces -x
+    assert front == pytest.approx(world.config.cabinet_distance + STAND_SETBACK)
+    table = world.body_pose("cabinet_table")
+    assert table[0, 3] > world.config.cabinet_distance  # the table extends behind its edge
+
+
+def test_snapshot_restore_returns_to_the_same_physics(world) -> None:
+    world.reset({world.part_joints[0]: 0.05})
+    world.step(0.1)
+    state = world.snapshot()
+    world.step(0.3)
+    after = world.data.qpos.copy()
+    world.restore(state)
+    assert world.snapshot() == state and hash(world.snapshot()) == hash(state)
+    world.step(0.3)
+    assert np.array_equal(world.data.qpos, after)  # bit for bit: physics is deterministic
+    with pytest.raises(StrugError, match="state must be a WorldState"):
+        world.restore("not a state")  # type: ignore[arg-type]
+
+
+def test_body_pose_by_name(world) -> None:
+    world.reset()
+    assert world.body_pose("object")[:3, 3] == pytest.approx(world.object_pose()[:3, 3])
+    with pytest.raises(StrugError, match="unknown body 'nope'"):
+        world.body_pose("nope")
+
+
+def test_a_spec_loads_in_memory_as_its_written_folder_does(tmp_path) -> None:
+    from strug_manip.objects import generate_cabinet, load_articulated_object, write_partnet
+    from strug_manip.objects.partnet import load_cabinet_spec
+
+    spec = generate_cabinet(17)
+    mem = load_cabinet_spec(spec)
+    disk = load_articulated_object(write_partnet(spec, tmp_path / "c"))
+    assert mem.folder is None and mem.urdf_path is None
+    assert mem.to_mjcf() == disk.to_mjcf()
+    assert np.array_equal(mem.bounds, disk.bounds) and mem.mass == disk.mass
+    assert list(mem.pin_model.names) == list(disk.pin_model.names)

@@ -23,7 +23,6 @@ from collections.abc import Callable
 import numpy as np
 
 from strug_manip.control.controllers import (
-    BelievedJoint,
     OpenDoor,
     OpenDrawer,
     Outcome,
@@ -33,6 +32,7 @@ from strug_manip.control.controllers import (
     PullV,
     Push,
     handle_grasp,
+    true_joint,
 )
 from strug_manip.world import ManipulationWorld, SceneConfig
 
@@ -55,12 +55,12 @@ def cases(drawers: ManipulationWorld, doors: ManipulationWorld) -> dict[str, Cal
     def open_drawer() -> Outcome:
         drawers.reset()
         g = handle_grasp(drawers, "link_1")
-        return OpenDrawer(g, BelievedJoint.of_part(drawers, "link_1")).run(drawers)
+        return OpenDrawer(g, true_joint(drawers, "link_1")).run(drawers)
 
     def open_door() -> Outcome:
         doors.reset()
         g = handle_grasp(doors, "link_1")
-        return OpenDoor(g, BelievedJoint.of_part(doors, "link_1")).run(doors)
+        return OpenDoor(g, true_joint(doors, "link_1")).run(doors)
 
     def pick() -> Outcome:
         drawers.reset({"joint_1": 0.2})

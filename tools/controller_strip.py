@@ -20,12 +20,12 @@ import numpy as np
 from PIL import Image, ImageDraw
 
 from strug_manip.control.controllers import (
-    BelievedJoint,
     OpenDoor,
     OpenDrawer,
     Pick,
     Place,
     handle_grasp,
+    true_joint,
 )
 from strug_manip.world import ManipulationWorld, SceneConfig
 
@@ -60,7 +60,7 @@ def main() -> None:
     drawers = ManipulationWorld(SceneConfig(cabinet_seed=3, cabinet_kinds=("drawer",)))
     frames: list = []
     g = handle_grasp(drawers, "link_1")
-    out = OpenDrawer(g, BelievedJoint.of_part(drawers, "link_1")).run(
+    out = OpenDrawer(g, true_joint(drawers, "link_1")).run(
         drawers, observer=grab(drawers, frames, ("start", "pre-grasp", "grasp", "end"))
     )
     rows.append((f"OpenDrawer: {out.reason}", frames))
@@ -68,7 +68,7 @@ def main() -> None:
     doors = ManipulationWorld(SceneConfig(cabinet_seed=3, cabinet_kinds=("door",)))
     frames = []
     g = handle_grasp(doors, "link_1")
-    out = OpenDoor(g, BelievedJoint.of_part(doors, "link_1")).run(
+    out = OpenDoor(g, true_joint(doors, "link_1")).run(
         doors, observer=grab(doors, frames, ("start", "pre-grasp", "grasp", "end"))
     )
     rows.append((f"OpenDoor: {out.reason}", frames))

@@ -5,9 +5,9 @@ and ``spec.json`` (the generator's ground truth: joints, handles, interiors), fo
 ``SEED .. SEED + COUNT - 1``. The committed examples in ``models/cabinets`` were made
 with::
 
-    python tools/generate_cabinets.py --seed 3 --kinds drawer --out models/cabinets
+    python tools/generate_cabinets.py --seed 11 --kinds drawer --out models/cabinets
     python tools/generate_cabinets.py --seed 7 --kinds door --out models/cabinets
-    python tools/generate_cabinets.py --seed 18 --out models/cabinets
+    python tools/generate_cabinets.py --seed 17 --out models/cabinets
 
 ``--check`` loads every written cabinet in MuJoCo and Pinocchio and prints its size.
 """

@@ -48,11 +48,10 @@ opening direction. Units: [m], [rad], [s].
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
 import mujoco
@@ -61,7 +60,8 @@ import numpy as np
 from planners.errors import ConfigError, UnknownNameError
 from strug_manip.control.ik import FetchIK, check_pose
 from strug_manip.control.motion import ArmMotionPlanner
-from strug_manip.objects.generator import CabinetSpec, PartSpec
+from strug_manip.objects.generator import PartSpec
+from strug_manip.objects.hypotheses import BelievedJoint, believed_spec  # noqa: F401
 from strug_manip.robot.fetch import BASE_JOINTS, GRIPPER_JOINTS, GRIPPER_SITE, FetchKinematics
 from strug_manip.world.scripted import (
     GRIPPER_CLOSED,
@@ -139,69 +139,6 @@ PLACE_TOLERANCE = 0.05
 
 
 @dataclass(frozen=True)
-class BelievedJoint:
-    """The joint of the part to operate, as the robot believes it (world frame).
-
-    Attributes:
-        type: ``"prismatic"`` or ``"revolute"``.
-        axis: unit axis, shape (3,): the opening direction of a prismatic joint, the
-            hinge axis of a revolute one (opening is positive rotation about it).
-        origin: a point on the hinge axis, shape (3,) [m] (unused for prismatic).
-        limit: travel left before the joint limit from its current position
-            [m or rad].
-    """
-
-    type: str
-    axis: np.ndarray
-    origin: np.ndarray = field(default_factory=lambda: np.zeros(3))
-    limit: float = math.inf
-
-    def __post_init__(self) -> None:
-        if self.type not in ("prismatic", "revolute"):
-            raise ConfigError(
-                f"BelievedJoint.type must be 'prismatic' or 'revolute', got {self.type!r}"
-            )
-        axis = np.asarray(self.axis, dtype=float).reshape(-1)
-        origin = np.asarray(self.origin, dtype=float).reshape(-1)
-        if axis.shape != (3,) or not np.all(np.isfinite(axis)) or np.linalg.norm(axis) < 1e-9:
-            raise ConfigError(
-                f"BelievedJoint.axis must be a finite non-zero (3,), got {self.axis!r}"
-            )
-        if origin.shape != (3,) or not np.all(np.isfinite(origin)):
-            raise ConfigError(f"BelievedJoint.origin must be a finite (3,), got {self.origin!r}")
-        if not self.limit > 0:
-            raise ConfigError(f"BelievedJoint.limit must be > 0, got {self.limit!r}")
-        object.__setattr__(self, "axis", axis / np.linalg.norm(axis))
-        object.__setattr__(self, "origin", origin)
-
-    def move(self, T: np.ndarray, q: float) -> np.ndarray:
-        """Where a pose ``T`` (4, 4) rigidly attached to the part goes when the joint
-        opens by ``q`` [m or rad] more."""
-        out = T.copy()
-        if self.type == "prismatic":
-            out[:3, 3] += q * self.axis
-            return out
-        R = _axis_angle(self.axis, q)
-        out[:3, :3] = R @ T[:3, :3]
-        out[:3, 3] = self.origin + R @ (T[:3, 3] - self.origin)
-        return out
-
-    @classmethod
-    def of_part(cls, world: ManipulationWorld, link: str) -> BelievedJoint:
-        """The true joint of cabinet part ``link`` (generator ground truth), in the world
-        frame at the cabinet's current pose, ``limit`` the travel left [m or rad]."""
-        part = _part(world, link)
-        T = _body_pose(world, world.scene.cabinet_prefix + world.scene.cabinet.root)
-        q = world.part_positions()[world.scene.cabinet_prefix + part.joint]
-        return cls(
-            type=part.joint_type,
-            axis=T[:3, :3] @ part.axis,
-            origin=(T @ np.r_[part.origin, 1.0])[:3],
-            limit=float(part.upper - q),
-        )
-
-
-@dataclass(frozen=True)
 class Outcome:
     """What one controller execution did.
 
@@ -268,86 +205,6 @@ class Controller(Protocol):
         ...
 
 
-#: Joint limit of a part whose believed joint type differs from the spec's and whose
-#: believed travel is unbounded: prismatic [m], revolute [rad].
-BELIEVED_PRISMATIC_UPPER = 0.5
-BELIEVED_REVOLUTE_UPPER = 0.5 * math.pi
-
-
-def believed_spec(
-    spec: CabinetSpec,
-    link: str,
-    joint: BelievedJoint,
-    T_world_cabinet: np.ndarray | None = None,
-    q: float = 0.0,
-) -> CabinetSpec:
-    """A copy of ``spec`` with part ``link``'s joint replaced by the believed ``joint``
-    (a belief particle's cabinet, to build a planning world from).
-
-    The part's geometry is kept where it is with the part closed; the link frame moves
-    to the believed hinge (revolute beliefs), the geometry and centre of mass being
-    re-expressed in it. Limits: ``[min(lower, 0), q + joint.limit]`` (same type: the
-    spec's lower; a changed type with unbounded travel: :data:`BELIEVED_PRISMATIC_UPPER`
-    [m] or :data:`BELIEVED_REVOLUTE_UPPER` [rad]).
-
-    Args:
-        spec: the cabinet (e.g. the generator's ground truth), not modified.
-        link: the movable part to change (``link_1``, ...).
-        joint: the believed joint in the world frame (axis, origin [m], limit: travel
-            left [m or rad] from ``q``).
-        T_world_cabinet: the cabinet frame in the world, (4, 4) [m] (default: identity,
-            ``joint`` given in the cabinet frame), e.g. ``world.scene.T_world_cabinet``.
-        q: the believed current joint position [m or rad].
-
-    Raises:
-        UnknownNameError: ``link`` is not a movable part of ``spec``.
-        ConfigError: a bad argument.
-    """
-    if not isinstance(spec, CabinetSpec):
-        raise ConfigError(f"spec must be a CabinetSpec, got {spec!r}")
-    if not isinstance(joint, BelievedJoint):
-        raise ConfigError(f"joint must be a BelievedJoint, got {joint!r}")
-    T = np.eye(4) if T_world_cabinet is None else check_pose("T_world_cabinet", T_world_cabinet)
-    if isinstance(q, bool) or not isinstance(q, int | float) or not math.isfinite(q):
-        raise ConfigError(f"q must be a finite number [m or rad], got {q!r}")
-    links = [p.link for p in spec.movable_parts]
-    if link not in links:
-        raise UnknownNameError("movable cabinet part link", link, links)
-    part = spec.part(link)
-    R, t = T[:3, :3], T[:3, 3]
-    axis = R.T @ joint.axis
-    if joint.type == "revolute":
-        origin = R.T @ (joint.origin - t)
-    else:
-        origin = np.asarray(part.origin, dtype=float).copy()
-    shift = np.asarray(part.origin, dtype=float) - origin  # old link frame in the new one
-    geoms = tuple(
-        dataclasses.replace(g, pos=tuple(float(v) for v in np.asarray(g.pos) + shift))
-        for g in part.geoms
-    )
-    inertial = dataclasses.replace(part.inertial, com=np.asarray(part.inertial.com) + shift)
-    same = joint.type == part.joint_type
-    if math.isfinite(joint.limit):
-        upper = float(q) + joint.limit
-    elif same:
-        upper = float(part.upper)
-    else:
-        upper = BELIEVED_PRISMATIC_UPPER if joint.type == "prismatic" else BELIEVED_REVOLUTE_UPPER
-    lower = min(float(part.lower) if same else 0.0, float(q), 0.0)
-    new = dataclasses.replace(
-        part,
-        joint_type=joint.type,
-        axis=axis,
-        origin=origin,
-        lower=lower,
-        upper=upper,
-        geoms=geoms,
-        inertial=inertial,
-    )
-    parts = tuple(new if p.link == link else p for p in spec.parts)
-    return dataclasses.replace(spec, parts=parts)
-
-
 # --- helpers -------------------------------------------------------------------------------
 
 
@@ -376,6 +233,15 @@ def _part(world: ManipulationWorld, link: str) -> PartSpec:
     if link not in links:
         raise UnknownNameError("movable cabinet part link", link, links)
     return spec.part(link)
+
+
+def true_joint(world: ManipulationWorld, link: str) -> BelievedJoint:
+    """The true joint of cabinet part ``link`` (generator ground truth), in the world
+    frame at the cabinet's current pose, ``limit`` the travel left [m or rad]."""
+    part = _part(world, link)
+    T = _body_pose(world, world.scene.cabinet_prefix + world.scene.cabinet.root)
+    q = world.part_positions()[world.scene.cabinet_prefix + part.joint]
+    return BelievedJoint.of_part(part, q, T)
 
 
 def _check_g(g: object) -> np.ndarray:

@@ -1,8 +1,8 @@
 """Articulated objects: the procedural cabinet generator and the PartNet-Mobility loader.
 
 - :mod:`strug_manip.objects.generator`: ``generate_cabinet(seed, kinds=...)``.
-- :mod:`strug_manip.objects.partnet`: ``write_partnet``, ``load_articulated_object``,
-  ``add_to_spec``, ``parse_urdf``.
+- :mod:`strug_manip.objects.partnet`: ``write_partnet``, ``load_articulated_object``
+  (a folder), ``load_cabinet_spec`` (a spec, in memory), ``add_to_spec``, ``parse_urdf``.
 """
 
 from strug_manip.objects.generator import (
@@ -19,7 +19,9 @@ from strug_manip.objects.partnet import (
     ParsedUrdf,
     add_to_spec,
     load_articulated_object,
+    load_cabinet_spec,
     parse_urdf,
+    parse_urdf_text,
     write_partnet,
 )
 
@@ -35,6 +37,8 @@ __all__ = [
     "add_to_spec",
     "generate_cabinet",
     "load_articulated_object",
+    "load_cabinet_spec",
     "parse_urdf",
+    "parse_urdf_text",
     "write_partnet",
 ]

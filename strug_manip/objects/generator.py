@@ -20,14 +20,21 @@ coordinates in the link, base and object frames.
 
 Documented ranges (all drawn uniformly unless stated)
 -----------------------------------------------------
+What is drawn, and why: *small storage furniture that stands on a table*, the paper's
+setting (its introduction speaks of "pulling the cabinet off the table"): bedside
+chests, desk-top drawer units, small wall or kitchen cabinets. On a table the Fetch
+reaches every handle with a level or slightly pitched grasp, and the cabinet is light
+enough for a wrong pull to drag it (see ``strug_manip.world.scene`` for the table and
+the friction of wood on wood).
+
 Carcass:
 
-- width ``W`` in [0.40, 1.00] m (along y), depth ``D`` in [0.35, 0.55] m (along x),
-  height ``H`` in [0.40, 1.20] m;
+- width ``W`` in [0.35, 0.90] m (along y), depth ``D`` in [0.30, 0.45] m (along x),
+  height ``H`` in [0.30, 0.85] m;
 - wall, top, bottom and divider thickness ``t`` in [0.015, 0.020] m, back panel
   thickness in [0.004, 0.008] m;
 - plinth (bottom panel raised on a recessed kick board): none with probability 0.5,
-  else a height in [0.04, 0.10] m.
+  else a height in [0.03, 0.08] m.
 
 Grid: cell widths in [0.20, 0.60] m and cell heights in [0.12, 0.45] m; the number of
 columns (1..3) and rows (1..4) is drawn uniformly among the counts that fit those
@@ -75,7 +82,10 @@ handle would be.
 
 Mass: boards have density ``rho`` in [450, 700] kg/m^3 (pine to MDF), handles 2700
 kg/m^3 (aluminium); ``rho`` is then rescaled if needed so the total mass lies in
-[10, 40] kg (hollow-core boards for the large cabinets, solid wood for the small).
+[5, 25] kg, the range of real small storage furniture (IKEA's KULLEN 3-drawer chest,
+35 x 40 x 70 cm: 10.5 kg; RAST bedside chest, 62 x 30 x 70 cm, pine: 11 kg; ALEX
+drawer unit, 36 x 58 x 70 cm: 24 kg): hollow-core boards for the largest, solid wood
+for the smallest.
 """
 
 from __future__ import annotations
@@ -111,12 +121,12 @@ SEMANTICS: dict[str, tuple[str, str]] = {
 }
 
 # Documented ranges [m], [kg/m^3], [N s/m], [N], [N m s/rad], [N m], [rad].
-WIDTH_RANGE = (0.40, 1.00)
-DEPTH_RANGE = (0.35, 0.55)
-HEIGHT_RANGE = (0.40, 1.20)
+WIDTH_RANGE = (0.35, 0.90)
+DEPTH_RANGE = (0.30, 0.45)
+HEIGHT_RANGE = (0.30, 0.85)
 WALL_RANGE = (0.015, 0.020)
 BACK_RANGE = (0.004, 0.008)
-PLINTH_RANGE = (0.04, 0.10)
+PLINTH_RANGE = (0.03, 0.08)
 PLINTH_PROB = 0.5
 CELL_WIDTH_RANGE = (0.20, 0.60)
 CELL_HEIGHT_RANGE = (0.12, 0.45)
@@ -146,7 +156,7 @@ KNOB_LENGTH = (0.020, 0.035)
 DOOR_HANDLE_INSET = (0.03, 0.06)
 WOOD_DENSITY = (450.0, 700.0)
 METAL_DENSITY = 2700.0
-TOTAL_MASS = (10.0, 40.0)
+TOTAL_MASS = (5.0, 25.0)
 JOINT_EFFORT = 100.0  # URDF <limit effort>: [N] or [N m], informative only
 JOINT_VELOCITY = 2.0  # URDF <limit velocity>: [m/s] or [rad/s], informative only
 GRAVITY = 9.81  # [m/s^2]
@@ -305,7 +315,7 @@ class PartSpec:
         if self.joint_type == "prismatic":
             return p + q * self.axis
         if self.joint_type == "revolute":
-            return self.origin + _axis_angle(self.axis, q) @ (p - self.origin)
+            return self.origin + axis_angle(self.axis, q) @ (p - self.origin)
         return p.copy()
 
     def handle_at(self, q: float, T_world_object: np.ndarray | None = None) -> np.ndarray | None:
@@ -385,7 +395,7 @@ class CabinetSpec:
         raise UnknownNameError("part link", link, [p.link for p in self.parts])
 
 
-def _axis_angle(axis: np.ndarray, angle: float) -> np.ndarray:
+def axis_angle(axis: np.ndarray, angle: float) -> np.ndarray:
     """Rotation matrix of ``angle`` [rad] about the unit ``axis`` (3,), shape (3, 3)."""
     x, y, z = axis
     c, s = math.cos(angle), math.sin(angle)

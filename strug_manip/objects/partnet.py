@@ -36,7 +36,11 @@ MuJoCo conversion (documented choices)
   wood/laminate on a hard floor) and ``priority=1`` so that value, not MuJoCo's
   max-of-pair rule, decides friction against the floor.
 - Joint ``<dynamics damping friction>`` become MuJoCo ``damping`` and
-  ``frictionloss``; ``<limit>`` becomes ``range`` (``continuous``: unlimited).
+  ``frictionloss``; ``<limit>`` becomes ``range`` (``continuous``: unlimited). Limits
+  are *hard stops* (:data:`LIMIT_SOLREF`, :data:`LIMIT_SOLIMP`: the stiffest constraint
+  MuJoCo integrates stably at a 2 ms step): the parts' contacts with their own carcass
+  are excluded (fronts sit in their openings with millimetre gaps), so the joint limit
+  is what keeps a door from being pushed through its closed stop.
 - Collision meshes are convex hulls in MuJoCo (a PartNet drawer mesh becomes a solid
   block: run a convex decomposition first if objects must go inside).
 """
@@ -46,7 +50,7 @@ from __future__ import annotations
 import json
 import math
 import xml.etree.ElementTree as ET
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -75,6 +79,11 @@ HELPER_MASS = 1e-3  # [kg] mass of a moving link without inertial nor geometry
 HELPER_INERTIA = 1e-6  # [kg m^2]
 BASE_FRICTION = 0.5  # sliding friction of the base against the floor
 FLOOR_SIZE = 5.0  # [m] half-size of the standalone floor plane
+#: Joint-limit constraint: time constant [s] (two 2 ms steps, MuJoCo's stability floor)
+#: and damping ratio, so a stop yields a few millimetres under 100 N, not centimetres.
+LIMIT_SOLREF = (0.004, 1.0)
+#: Joint-limit impedance (d0, dwidth, width [m or rad], midpoint, power): near-rigid.
+LIMIT_SOLIMP = (0.99, 0.999, 0.001, 0.5, 2.0)
 
 
 # ------------------------------------------------------------------------------------
@@ -344,7 +353,8 @@ class ArticulatedObject:
 
     Attributes:
         name: the URDF robot name.
-        folder: the object folder; urdf_path: its ``mobility.urdf``.
+        folder: the object folder; urdf_path: its ``mobility.urdf`` (both ``None`` for
+            an object loaded in memory, :func:`load_cabinet_spec`).
         root: root link name (``base``).
         links: link name -> :class:`LinkInfo`, in tree order (root first).
         joints: every joint (fixed ones included), in tree order.
@@ -363,8 +373,8 @@ class ArticulatedObject:
     """
 
     name: str
-    folder: Path
-    urdf_path: Path
+    folder: Path | None
+    urdf_path: Path | None
     root: str
     links: dict[str, LinkInfo]
     joints: tuple[JointInfo, ...]
@@ -678,8 +688,16 @@ def _read_semantics(folder: Path, links: Mapping[str, LinkInfo]) -> dict[str, tu
     path = folder / SEMANTICS_NAME
     if not path.is_file():
         return {}
+    return _parse_semantics(path.read_text(), path, links)
+
+
+def _parse_semantics(
+    text: str, path: Path, links: Mapping[str, LinkInfo]
+) -> dict[str, tuple[str, str]]:
+    """``{link: (joint word, label)}`` of a semantics.txt's ``text`` (``path``: for
+    messages)."""
     out = {}
-    for i, line in enumerate(path.read_text().splitlines(), start=1):
+    for i, line in enumerate(text.splitlines(), start=1):
         words = line.split()
         if not words:
             continue
@@ -730,6 +748,34 @@ def parse_urdf(urdf_path: Path) -> ParsedUrdf:
         tree = ET.parse(urdf_path)
     except ET.ParseError as e:
         raise p.fail(f"not valid XML ({e})") from None
+    return _parse_tree(p, tree, lambda links: _read_semantics(urdf_path.parent, links))
+
+
+def parse_urdf_text(urdf: str, semantics: str = "", *, path: str | Path = URDF_NAME) -> ParsedUrdf:
+    """Parse and validate a URDF given as text, with its ``semantics.txt`` text, in
+    memory (no file is read or written; meshes are looked up relative to ``path``).
+
+    Args:
+        urdf: the URDF XML.
+        semantics: the semantics.txt lines ("" for none).
+        path: where the URDF would live, for messages and relative mesh paths.
+
+    Raises:
+        ConfigError: one message naming ``path`` and the problem.
+    """
+    path = Path(path)
+    p = _Parser(path)
+    try:
+        tree = ET.ElementTree(ET.fromstring(urdf))
+    except ET.ParseError as e:
+        raise p.fail(f"not valid XML ({e})") from None
+    return _parse_tree(p, tree, lambda links: _parse_semantics(semantics, path, links))
+
+
+def _parse_tree(
+    p: _Parser, tree: ET.ElementTree, read_semantics: Callable[[dict], dict]
+) -> ParsedUrdf:
+    urdf_path = p.path
     root_elem = tree.getroot()
     if root_elem.tag != "robot":
         raise p.fail(f"the root element is <{root_elem.tag}>, expected <robot>")
@@ -756,7 +802,7 @@ def parse_urdf(urdf_path: Path) -> ParsedUrdf:
     roots = [n for n in links if n not in parent_of]
     if len(roots) != 1:
         raise p.fail(f"expected exactly one root link, found {len(roots)}: {roots}")
-    semantics = _read_semantics(urdf_path.parent, links)
+    semantics = read_semantics(links)
     for n, (word, label) in semantics.items():
         links[n] = replace(links[n], semantic_type=word, semantic=label)
     # Tree order (depth first from the root), with each joint's pose in the root frame.
@@ -972,6 +1018,8 @@ def _build(
                 scale = hinge_scale if j.type == "revolute" else 1.0
                 mj.limited = mujoco.mjtLimited.mjLIMITED_TRUE
                 mj.range = [j.lower * scale, j.upper * scale]
+                mj.solref_limit = list(LIMIT_SOLREF)
+                mj.solimp_limit = list(LIMIT_SOLIMP)
         add_geoms(body, link)
         set_inertial(body, link, moving=j.movable)
         bodies[j.child] = body
@@ -1073,18 +1121,41 @@ def _bounds(model: mujoco.MjModel, body_ids: set[int]) -> np.ndarray:
 
 
 def _pinocchio(urdf: ParsedUrdf, path: Path) -> pin.Model:
-    try:
-        if not urdf.needs_sanitizing:
-            return pin.buildModelFromUrdf(str(path))
+    """Pinocchio's model of the parsed URDF (from its XML tree, in memory)."""
+    root = urdf.tree.getroot()
+    if urdf.needs_sanitizing:
         # urdfdom (Pinocchio's parser) requires effort and velocity in every <limit>;
         # PartNet-Mobility files omit them: fill them in on a copy.
-        root = ET.fromstring(ET.tostring(urdf.tree.getroot()))
+        root = ET.fromstring(ET.tostring(root))
         for lim in root.iter("limit"):
             lim.set("effort", lim.get("effort", _f(JOINT_EFFORT)))
             lim.set("velocity", lim.get("velocity", _f(JOINT_VELOCITY)))
+    try:
         return pin.buildModelFromXML(ET.tostring(root, encoding="unicode"))
     except Exception as e:  # urdfdom errors surface as ValueError/RuntimeError
         raise ConfigError(f"malformed URDF {path}: Pinocchio cannot parse it ({e})") from None
+
+
+def load_cabinet_spec(
+    spec: CabinetSpec,
+    *,
+    free: bool = True,
+    floor: bool = True,
+    base_friction: float = BASE_FRICTION,
+) -> ArticulatedObject:
+    """Load a generated (or believed) cabinet into MuJoCo and Pinocchio in memory: the
+    same URDF and semantics :func:`write_partnet` would write, parsed from text, so a
+    belief particle compiles without touching the disk. ``folder`` and ``urdf_path``
+    of the result are ``None``. Options as :func:`load_articulated_object`.
+
+    Raises:
+        ConfigError: ``spec`` is not a :class:`CabinetSpec`, or a bad option.
+    """
+    if not isinstance(spec, CabinetSpec):
+        raise ConfigError(f"spec must be a CabinetSpec, got {type(spec).__name__}")
+    path = Path(spec.name) / URDF_NAME
+    urdf = parse_urdf_text(cabinet_urdf(spec), cabinet_semantics(spec), path=path)
+    return _load(urdf, path, None, free=free, floor=floor, base_friction=base_friction)
 
 
 def load_articulated_object(
@@ -1115,11 +1186,33 @@ def load_articulated_object(
     """
     path = Path(folder)
     urdf_path = path if path.suffix.lower() == ".urdf" else path / URDF_NAME
-    if not math.isfinite(base_friction) or base_friction < 0:
-        raise ConfigError(f"base_friction must be a finite number >= 0, got {base_friction!r}")
     if total_mass is not None and not (math.isfinite(total_mass) and total_mass > 0):
         raise ConfigError(f"total_mass must be a finite number > 0, got {total_mass!r}")
     urdf = parse_urdf(urdf_path)
+    return _load(
+        urdf,
+        urdf_path,
+        urdf_path.parent,
+        free=free,
+        floor=floor,
+        base_friction=base_friction,
+        total_mass=total_mass,
+    )
+
+
+def _load(
+    urdf: ParsedUrdf,
+    urdf_path: Path,
+    folder: Path | None,
+    *,
+    free: bool,
+    floor: bool,
+    base_friction: float,
+    total_mass: float | None = None,
+) -> ArticulatedObject:
+    """The :class:`ArticulatedObject` of a parsed URDF (``folder`` None: in memory)."""
+    if not math.isfinite(base_friction) or base_friction < 0:
+        raise ConfigError(f"base_friction must be a finite number >= 0, got {base_friction!r}")
     pin_model = _pinocchio(urdf, urdf_path)
 
     def make_spec(z: float, mass_scale: float) -> mujoco.MjSpec:
@@ -1153,8 +1246,8 @@ def load_articulated_object(
         model = _compile(spec, urdf_path)
     return ArticulatedObject(
         name=urdf.name,
-        folder=urdf_path.parent,
-        urdf_path=urdf_path,
+        folder=folder,
+        urdf_path=None if folder is None else urdf_path,
         root=urdf.root,
         links=urdf.links,
         joints=urdf.joints,

@@ -1,11 +1,22 @@
-"""Compose the manipulation scene: Fetch + floor + table + object + one free cabinet.
+"""Compose the manipulation scene: Fetch + floor + two tables + object + one free cabinet.
 
-World frame: the robot's base starts at the origin facing +x. The cabinet stands
-``cabinet_distance`` in front of it, its open front (+x of the cabinet frame) facing
-the robot, on a free joint (so a wrong pull drags it). A table stands to the robot's
-right (-y) with a spam-can-sized box on it (YCB's potted meat can, 0.10 x 0.06 x 0.085 m,
-0.37 kg). An ``overview`` camera looks at the whole scene; the robot's ``head_camera``
-is its RGB-D sensor. Shadows are off (the floor light casts none) for speed.
+World frame: the robot's base starts at the origin facing +x. In front of it stands the
+*cabinet table* (a low sideboard, top :data:`STAND_HEIGHT` high, its front edge
+``cabinet_distance`` ahead), and on it the cabinet, its open front (+x of the cabinet
+frame) facing the robot :data:`STAND_SETBACK` behind the table's edge, on a free joint:
+a wrong pull drags it across the table top, or off it. This is the paper's setting (a
+small storage cabinet standing on a table; see the generator's docstring for the
+cabinets drawn). ``stand_height=0`` puts the cabinet on the floor instead.
+
+A second table stands to the robot's right (-y) with a spam-can-sized box on it (YCB's
+potted meat can, 0.10 x 0.06 x 0.085 m, 0.37 kg). An ``overview`` camera looks at the
+whole scene; the robot's ``head_camera`` is its RGB-D sensor. Shadows are off (the floor
+light casts none) for speed.
+
+Friction of the cabinet on its table: :data:`CABINET_FRICTION` = 0.4, dry wood (or
+laminate) on wood, whose measured static coefficients lie in 0.25-0.5 (Engineering
+ToolBox, "Friction and Friction Coefficients for various Materials"); MuJoCo's Coulomb
+model uses one coefficient for sticking and sliding.
 
 Contacts: the cabinet base is excluded against its own moving parts (by the loader);
 the robot base against the world (its wheels only touch the floor visually).
@@ -27,7 +38,7 @@ from strug_manip.objects import (
     add_to_spec,
     generate_cabinet,
     load_articulated_object,
-    write_partnet,
+    load_cabinet_spec,
 )
 from strug_manip.robot.fetch import FETCH_SCENE_XML, HOME_KEYFRAME
 
@@ -38,6 +49,19 @@ OBJECT_MASS = 0.37
 #: Table top height [m], half extents of the top [m].
 TABLE_HEIGHT = 0.72
 TABLE_HALF = (0.30, 0.40, 0.02)
+#: Height of the cabinet table's top [m]: a low sideboard, so that every handle of the
+#: generated cabinets (0.30-0.85 m tall) lies 0.55-1.30 m above the floor, where the
+#: Fetch grasps with a level or slightly pitched gripper.
+STAND_HEIGHT = 0.50
+#: Smallest top of the cabinet table (depth along x, width along y) [m]; larger
+#: cabinets get a top 0.15 m deeper and 0.2 m wider than their footprint.
+STAND_TOP = (0.60, 1.10)
+#: Thickness of the cabinet table's top [m].
+STAND_THICKNESS = 0.03
+#: Distance of the cabinet's front plane behind the table's front edge [m].
+STAND_SETBACK = 0.02
+#: Sliding friction of the cabinet on its table (dry wood on wood: 0.25-0.5) [-].
+CABINET_FRICTION = 0.4
 
 
 @dataclass(frozen=True)
@@ -50,8 +74,12 @@ class SceneConfig:
         cabinet_kinds: part kinds the generator may use (``drawer``, ``door``,
             ``shelf``, ``panel``).
         cabinet_folder: a PartNet-Mobility folder to load instead of generating one.
-        cabinet_distance: distance of the cabinet's front from the robot's origin [m].
+        cabinet_distance: distance of the cabinet table's front edge (with
+            ``stand_height=0``: of the cabinet's foremost point) from the robot's
+            origin [m].
         cabinet_lateral: lateral offset of the cabinet (+y) [m].
+        stand_height: height of the cabinet table's top [m]; 0 stands the cabinet on
+            the floor (no table; floor friction: the loader's, 0.5).
         table_xy: position of the table centre [m].
         timestep: physics step [s].
         width, height: camera image size [px].
@@ -67,6 +95,7 @@ class SceneConfig:
     cabinet_folder: Path | None = None
     cabinet_distance: float = 1.0
     cabinet_lateral: float = 0.0
+    stand_height: float = STAND_HEIGHT
     table_xy: tuple[float, float] = (0.45, -0.85)
     timestep: float = 0.002
     width: int = 320
@@ -82,6 +111,7 @@ class SceneConfig:
             if self.cabinet_folder is not None:
                 raise ConfigError("give cabinet_spec or cabinet_folder, not both")
         check_positive_float("cabinet_distance", self.cabinet_distance)
+        check_positive_float("stand_height", self.stand_height, allow_zero=True, upper=1.5)
         check_positive_float("timestep", self.timestep, upper=0.01)
         for name in ("width", "height"):
             if not isinstance(getattr(self, name), int) or getattr(self, name) < 8:
@@ -131,18 +161,46 @@ def _home_by_name() -> dict[str, float]:
     return out
 
 
-def build_scene(config: SceneConfig, workdir: Path) -> SceneModel:
-    """Build the scene of ``config``; generated (or given) cabinets are written under
-    ``workdir``."""
+def _add_stand(
+    world: mujoco.MjsBody, edge: float, y: float, size: np.ndarray, height: float
+) -> None:
+    """The cabinet table, fixed to the world: its front edge at world ``x = edge``,
+    centred on ``y``, its top ``height`` high [m], large enough for a cabinet footprint
+    ``size`` = (depth along x, width along y) [m] standing :data:`STAND_SETBACK` behind
+    the edge."""
+    depth = max(STAND_TOP[0], STAND_SETBACK + float(size[0]) + 0.15)
+    width = max(STAND_TOP[1], float(size[1]) + 0.2)
+    stand = world.add_body(name="cabinet_table", pos=[edge + depth / 2, y, 0.0])
+    stand.add_geom(
+        name="cabinet_table_top",
+        type=mujoco.mjtGeom.mjGEOM_BOX,
+        size=[depth / 2, width / 2, STAND_THICKNESS / 2],
+        pos=[0, 0, height - STAND_THICKNESS / 2],
+        rgba=[0.42, 0.32, 0.24, 1],
+        friction=[CABINET_FRICTION, 0.005, 0.0001],
+    )
+    leg = (height - STAND_THICKNESS) / 2
+    for sx in (-1, 1):
+        for sy in (-1, 1):
+            stand.add_geom(
+                type=mujoco.mjtGeom.mjGEOM_BOX,
+                size=[0.02, 0.02, leg],
+                pos=[sx * (depth / 2 - 0.03), sy * (width / 2 - 0.03), leg],
+                rgba=[0.3, 0.25, 0.2, 1],
+            )
+
+
+def build_scene(config: SceneConfig) -> SceneModel:
+    """Build the scene of ``config``, in memory (a generated or given cabinet is never
+    written to disk; a ``cabinet_folder`` is read from it)."""
     if config.cabinet_folder is not None:
-        folder, cab_spec = Path(config.cabinet_folder), None
-    elif config.cabinet_spec is not None:
-        cab_spec = config.cabinet_spec
-        folder = write_partnet(cab_spec, Path(workdir) / cab_spec.name)
+        cab_spec = None
+        cabinet = load_articulated_object(Path(config.cabinet_folder))
     else:
-        cab_spec = generate_cabinet(config.cabinet_seed, kinds=config.cabinet_kinds)
-        folder = write_partnet(cab_spec, Path(workdir) / cab_spec.name)
-    cabinet = load_articulated_object(folder)
+        cab_spec = config.cabinet_spec
+        if cab_spec is None:
+            cab_spec = generate_cabinet(config.cabinet_seed, kinds=config.cabinet_kinds)
+        cabinet = load_cabinet_spec(cab_spec)
     spec = mujoco.MjSpec.from_file(str(FETCH_SCENE_XML))
     spec.option.timestep = config.timestep
     spec.visual.global_.offwidth = max(config.width, 1280)
@@ -192,8 +250,20 @@ def build_scene(config: SceneConfig, workdir: Path) -> SceneModel:
 
     # The cabinet faces the robot: its +x (front) points to -x of the world.
     yaw = math.pi
-    pos = [config.cabinet_distance + cabinet.bounds[1, 0], config.cabinet_lateral, 0.0]
-    add_to_spec(spec, cabinet, pos, yaw, free=True, prefix="cabinet/")
+    if config.stand_height > 0:
+        # Our cabinets' front plane is x = depth / 2; a loaded folder's is its bounds.
+        front = cab_spec.depth / 2 if cab_spec is not None else float(cabinet.bounds[1, 0])
+        x = config.cabinet_distance + STAND_SETBACK + front
+        pos = [x, config.cabinet_lateral, config.stand_height]
+        size = cabinet.bounds[1, :2] - cabinet.bounds[0, :2]
+        _add_stand(
+            world, config.cabinet_distance, config.cabinet_lateral, size, config.stand_height
+        )
+        friction = CABINET_FRICTION
+    else:
+        pos = [config.cabinet_distance + cabinet.bounds[1, 0], config.cabinet_lateral, 0.0]
+        friction = None
+    add_to_spec(spec, cabinet, pos, yaw, free=True, prefix="cabinet/", base_friction=friction)
     eye = (-0.9, 1.5, 1.8)
     world.add_camera(name="overview", pos=list(eye), xyaxes=look_at_xyaxes(eye, (1.0, -0.35, 0.55)))
     model = spec.compile()

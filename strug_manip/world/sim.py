@@ -16,9 +16,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import tempfile
 from dataclasses import dataclass
-from pathlib import Path
 
 import mujoco
 import numpy as np
@@ -29,6 +27,35 @@ from strug_manip.world.scene import SceneConfig, SceneModel, build_scene
 
 #: The graspable object's free joint (its pose is observed, not believed).
 OBJECT_JOINT = "object/free"
+#: What a snapshot holds: MuJoCo's full integration state (time, qpos, qvel, act,
+#: warm start, controls, applied forces, mocap poses, equality activations).
+_STATE = mujoco.mjtState.mjSTATE_INTEGRATION
+
+
+@dataclass(frozen=True, eq=False)
+class WorldState:
+    """A :meth:`ManipulationWorld.snapshot`: compared and hashed by value, so it can key
+    a cache.
+
+    Attributes:
+        physics: MuJoCo's integration state (``mj_getState``), shape (n,).
+        cabinet_start: where the cabinet base stood at the episode's reset, (3,) [m]
+            (what :meth:`ManipulationWorld.cabinet_displacement` measures from).
+    """
+
+    physics: np.ndarray
+    cabinet_start: np.ndarray
+
+    @property
+    def key(self) -> bytes:
+        """The state's bytes (equal states, equal keys)."""
+        return self.physics.tobytes() + self.cabinet_start.tobytes()
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, WorldState) and self.key == other.key
+
+    def __hash__(self) -> int:
+        return hash(self.key)
 
 
 @dataclass(frozen=True)
@@ -86,17 +113,13 @@ class ManipulationWorld:
     """The scene, with reset, stepping, state read-out and rendering.
 
     Args:
-        config: what to build (default: the built-in scene, cabinet seed 3).
-        workdir: where generated cabinets are written (default: a temporary folder).
+        config: what to build (default: the built-in scene, cabinet seed 3); built in
+            memory (:func:`~strug_manip.world.scene.build_scene`).
     """
 
-    def __init__(self, config: SceneConfig | None = None, workdir: Path | None = None) -> None:
+    def __init__(self, config: SceneConfig | None = None) -> None:
         self.config = config or SceneConfig()
-        self._tmp = None
-        if workdir is None:
-            self._tmp = tempfile.TemporaryDirectory(prefix="strug_scene_")
-            workdir = Path(self._tmp.name)
-        self.scene: SceneModel = build_scene(self.config, workdir)
+        self.scene: SceneModel = build_scene(self.config)
         self.model = self.scene.model
         self.data = mujoco.MjData(self.model)
         m = self.model
@@ -114,11 +137,11 @@ class ManipulationWorld:
 
     @classmethod
     def from_cabinet_spec(
-        cls, spec: CabinetSpec, config: SceneConfig | None = None, workdir: Path | None = None
+        cls, spec: CabinetSpec, config: SceneConfig | None = None
     ) -> ManipulationWorld:
         """The scene of ``config`` (default: the built-in one) with the cabinet ``spec``
         instead of a generated one, e.g. a *planning world* for a believed cabinet
-        (a belief particle: see :func:`strug_manip.control.controllers.believed_spec`).
+        (a belief particle: see :func:`strug_manip.objects.hypotheses.believed_spec`).
 
         Raises:
             ConfigError: ``spec`` is not a :class:`CabinetSpec`, or ``config`` names a
@@ -127,7 +150,7 @@ class ManipulationWorld:
         base = config or SceneConfig()
         if base.cabinet_folder is not None:
             raise ConfigError("a world from a cabinet spec cannot also load cabinet_folder")
-        return cls(dataclasses.replace(base, cabinet_spec=spec), workdir)
+        return cls(dataclasses.replace(base, cabinet_spec=spec))
 
     # --- state -------------------------------------------------------------------------
     def reset(self, part_positions: dict[str, float] | None = None) -> None:
@@ -147,6 +170,31 @@ class ManipulationWorld:
         self._fill_gripper_ctrl()
         mujoco.mj_forward(m, d)
         self._cabinet_start = d.xpos[self._cabinet_body].copy()
+
+    def snapshot(self) -> WorldState:
+        """The whole simulation state (physics, controls, time) and the episode's cabinet
+        reference position, to :meth:`restore` later (e.g. a search's node state)."""
+        m, d = self.model, self.data
+        state = np.empty(mujoco.mj_stateSize(m, _STATE))
+        mujoco.mj_getState(m, d, state, _STATE)
+        return WorldState(state, self._cabinet_start.copy())
+
+    def restore(self, state: WorldState) -> None:
+        """Return to a :meth:`snapshot` of this world (or of a world of the same scene
+        model) and update the kinematics.
+
+        Raises:
+            ConfigError: ``state`` is not a :class:`WorldState` of this model's size.
+        """
+        m, d = self.model, self.data
+        n = mujoco.mj_stateSize(m, _STATE)
+        if not isinstance(state, WorldState) or state.physics.shape != (n,):
+            raise ConfigError(
+                f"state must be a WorldState of this world (physics size {n}), got {state!r}"
+            )
+        mujoco.mj_setState(m, d, state.physics, _STATE)
+        self._cabinet_start = state.cabinet_start.copy()
+        mujoco.mj_forward(m, d)
 
     def _fill_gripper_ctrl(self) -> None:
         m, d = self.model, self.data
@@ -218,6 +266,18 @@ class ManipulationWorld:
     def object_pose(self) -> np.ndarray:
         """``T_world_object``, 4x4."""
         return _pose(self.data.xmat[self._object_body], self.data.xpos[self._object_body])
+
+    def body_pose(self, name: str) -> np.ndarray:
+        """``T_world_body`` (4, 4) of a named body (as of the last kinematics update).
+
+        Raises:
+            UnknownNameError: no body of that name.
+        """
+        bid = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, name)
+        if bid < 0:
+            names = [self.model.body(i).name for i in range(self.model.nbody)]
+            raise UnknownNameError("body", name, names)
+        return _pose(self.data.xmat[bid], self.data.xpos[bid])
 
     def site_pose(self, name: str) -> np.ndarray:
         """``T_world_site`` of a named site, 4x4."""
@@ -291,10 +351,7 @@ class ManipulationWorld:
         return pts, frame.segmentation.reshape(-1)[idx]
 
     def close(self) -> None:
-        """Free the renderer and the temporary folder."""
+        """Free the renderer."""
         if self._renderer is not None:
             self._renderer.close()
             self._renderer = None
-        if self._tmp is not None:
-            self._tmp.cleanup()
-            self._tmp = None

@@ -1,0 +1,194 @@
+"""Joint hypotheses: a part's joint as the robot believes it, and the cabinet it implies.
+
+:class:`BelievedJoint` is one movable part's joint in the world frame (type, axis,
+hinge point, travel left): what an opening skill follows. :func:`believed_spec` turns
+a :class:`~strug_manip.objects.generator.CabinetSpec` and a believed joint of one of its
+parts into the cabinet that belief describes (a belief particle), which the world
+compiles like any other (``ManipulationWorld.from_cabinet_spec``).
+
+Units: [m], [rad]; poses are 4x4 homogeneous transforms ``T_world_frame``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from planners.errors import ConfigError, UnknownNameError
+from strug_manip.objects.generator import CabinetSpec, PartSpec, axis_angle
+
+
+def check_pose(name: str, T: object) -> np.ndarray:
+    """Return ``T`` as a float (4, 4) rigid transform, or raise :class:`ConfigError`.
+
+    Checks shape, finiteness, the last row ``(0, 0, 0, 1)`` and that the rotation block
+    is orthonormal with determinant +1 (to 1e-6).
+    """
+    try:
+        arr = np.asarray(T, dtype=float)
+    except (TypeError, ValueError):
+        raise ConfigError(f"{name} must be a 4x4 homogeneous transform [m], got {T!r}") from None
+    if arr.shape != (4, 4):
+        raise ConfigError(
+            f"{name} must be a 4x4 homogeneous transform [m], got shape {arr.shape}: {T!r}"
+        )
+    if not np.all(np.isfinite(arr)):
+        raise ConfigError(f"{name} must be finite, got {arr.tolist()!r}")
+    if not np.allclose(arr[3], (0.0, 0.0, 0.0, 1.0), atol=1e-9):
+        raise ConfigError(f"{name} must end with the row (0, 0, 0, 1), got {arr[3].tolist()!r}")
+    R = arr[:3, :3]
+    if not np.allclose(R.T @ R, np.eye(3), atol=1e-6) or np.linalg.det(R) < 0:
+        raise ConfigError(
+            f"the rotation block of {name} must be a rotation matrix (orthonormal, det +1), "
+            f"got {R.tolist()!r}"
+        )
+    return arr
+
+
+@dataclass(frozen=True)
+class BelievedJoint:
+    """The joint of the part to operate, as the robot believes it (world frame).
+
+    Attributes:
+        type: ``"prismatic"`` or ``"revolute"``.
+        axis: unit axis, shape (3,): the opening direction of a prismatic joint, the
+            hinge axis of a revolute one (opening is positive rotation about it).
+        origin: a point on the hinge axis, shape (3,) [m] (unused for prismatic).
+        limit: travel left before the joint limit from its current position
+            [m or rad].
+    """
+
+    type: str
+    axis: np.ndarray
+    origin: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    limit: float = math.inf
+
+    def __post_init__(self) -> None:
+        if self.type not in ("prismatic", "revolute"):
+            raise ConfigError(
+                f"BelievedJoint.type must be 'prismatic' or 'revolute', got {self.type!r}"
+            )
+        axis = np.asarray(self.axis, dtype=float).reshape(-1)
+        origin = np.asarray(self.origin, dtype=float).reshape(-1)
+        if axis.shape != (3,) or not np.all(np.isfinite(axis)) or np.linalg.norm(axis) < 1e-9:
+            raise ConfigError(
+                f"BelievedJoint.axis must be a finite non-zero (3,), got {self.axis!r}"
+            )
+        if origin.shape != (3,) or not np.all(np.isfinite(origin)):
+            raise ConfigError(f"BelievedJoint.origin must be a finite (3,), got {self.origin!r}")
+        if not self.limit > 0:
+            raise ConfigError(f"BelievedJoint.limit must be > 0, got {self.limit!r}")
+        object.__setattr__(self, "axis", axis / np.linalg.norm(axis))
+        object.__setattr__(self, "origin", origin)
+
+    def move(self, T: np.ndarray, q: float) -> np.ndarray:
+        """Where a pose ``T`` (4, 4) rigidly attached to the part goes when the joint
+        opens by ``q`` [m or rad] more."""
+        out = T.copy()
+        if self.type == "prismatic":
+            out[:3, 3] += q * self.axis
+            return out
+        R = axis_angle(self.axis, q)
+        out[:3, :3] = R @ T[:3, :3]
+        out[:3, 3] = self.origin + R @ (T[:3, 3] - self.origin)
+        return out
+
+    @classmethod
+    def of_part(
+        cls, part: PartSpec, q: float = 0.0, T_world_object: np.ndarray | None = None
+    ) -> BelievedJoint:
+        """The joint of ``part`` (e.g. the generator's ground truth) at joint position
+        ``q`` [m or rad], in the world frame of ``T_world_object`` (4, 4; default
+        identity: the object frame); ``limit`` is the travel left to the upper limit."""
+        if not isinstance(part, PartSpec) or not part.movable:
+            raise ConfigError(f"part must be a movable PartSpec, got {part!r}")
+        T = np.eye(4) if T_world_object is None else np.asarray(T_world_object, dtype=float)
+        return cls(
+            type=part.joint_type,
+            axis=T[:3, :3] @ part.axis,
+            origin=(T @ np.r_[part.origin, 1.0])[:3],
+            limit=max(float(part.upper - q), 1e-9),
+        )
+
+
+#: Joint limit of a part whose believed joint type differs from the spec's and whose
+#: believed travel is unbounded: prismatic [m], revolute [rad].
+BELIEVED_PRISMATIC_UPPER = 0.5
+BELIEVED_REVOLUTE_UPPER = 0.5 * math.pi
+
+
+def believed_spec(
+    spec: CabinetSpec,
+    link: str,
+    joint: BelievedJoint,
+    T_world_cabinet: np.ndarray | None = None,
+    q: float = 0.0,
+) -> CabinetSpec:
+    """A copy of ``spec`` with part ``link``'s joint replaced by the believed ``joint``
+    (a belief particle's cabinet, to build a planning world from).
+
+    The part's geometry is kept where it is with the part closed; the link frame moves
+    to the believed hinge (revolute beliefs), the geometry and centre of mass being
+    re-expressed in it. Limits: ``[min(lower, 0), q + joint.limit]`` (same type: the
+    spec's lower; a changed type with unbounded travel: :data:`BELIEVED_PRISMATIC_UPPER`
+    [m] or :data:`BELIEVED_REVOLUTE_UPPER` [rad]).
+
+    Args:
+        spec: the cabinet (e.g. the generator's ground truth), not modified.
+        link: the movable part to change (``link_1``, ...).
+        joint: the believed joint in the world frame (axis, origin [m], limit: travel
+            left [m or rad] from ``q``).
+        T_world_cabinet: the cabinet frame in the world, (4, 4) [m] (default: identity,
+            ``joint`` given in the cabinet frame), e.g. ``world.scene.T_world_cabinet``.
+        q: the believed current joint position [m or rad].
+
+    Raises:
+        UnknownNameError: ``link`` is not a movable part of ``spec``.
+        ConfigError: a bad argument.
+    """
+    if not isinstance(spec, CabinetSpec):
+        raise ConfigError(f"spec must be a CabinetSpec, got {spec!r}")
+    if not isinstance(joint, BelievedJoint):
+        raise ConfigError(f"joint must be a BelievedJoint, got {joint!r}")
+    T = np.eye(4) if T_world_cabinet is None else check_pose("T_world_cabinet", T_world_cabinet)
+    if isinstance(q, bool) or not isinstance(q, int | float) or not math.isfinite(q):
+        raise ConfigError(f"q must be a finite number [m or rad], got {q!r}")
+    links = [p.link for p in spec.movable_parts]
+    if link not in links:
+        raise UnknownNameError("movable cabinet part link", link, links)
+    part = spec.part(link)
+    R, t = T[:3, :3], T[:3, 3]
+    axis = R.T @ joint.axis
+    if joint.type == "revolute":
+        origin = R.T @ (joint.origin - t)
+    else:
+        origin = np.asarray(part.origin, dtype=float).copy()
+    shift = np.asarray(part.origin, dtype=float) - origin  # old link frame in the new one
+    geoms = tuple(
+        dataclasses.replace(g, pos=tuple(float(v) for v in np.asarray(g.pos) + shift))
+        for g in part.geoms
+    )
+    inertial = dataclasses.replace(part.inertial, com=np.asarray(part.inertial.com) + shift)
+    same = joint.type == part.joint_type
+    if math.isfinite(joint.limit):
+        upper = float(q) + joint.limit
+    elif same:
+        upper = float(part.upper)
+    else:
+        upper = BELIEVED_PRISMATIC_UPPER if joint.type == "prismatic" else BELIEVED_REVOLUTE_UPPER
+    lower = min(float(part.lower) if same else 0.0, float(q), 0.0)
+    new = dataclasses.replace(
+        part,
+        joint_type=joint.type,
+        axis=axis,
+        origin=origin,
+        lower=lower,
+        upper=upper,
+        geoms=geoms,
+        inertial=inertial,
+    )
+    parts = tuple(new if p.link == link else p for p in spec.parts)
+    return dataclasses.replace(spec, parts=parts)
