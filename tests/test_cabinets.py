@@ -62,8 +62,12 @@ def test_documented_ranges_hold() -> None:
                 side = p.hinge in ("left", "right")
                 assert _inside(p.upper, gen.DOOR_SIDE_LIMIT if side else gen.DOOR_FLAP_LIMIT)
                 assert _inside(p.damping, gen.DOOR_DAMPING)
-                if p.hinge != "bottom":
+                if side:
                     assert _inside(p.friction, gen.DOOR_FRICTION)
+                else:  # a flap's stay holds it against gravity even when horizontal
+                    lever = abs(float(p.inertial.com[2]))
+                    hold = p.friction / (p.inertial.mass * gen.GRAVITY * lever)
+                    assert _inside(hold, gen.FLAP_STAY_HOLD, 1e-9)
             else:
                 assert p.joint_type == "fixed" and p.handle_pos is None
             if p.movable:
@@ -155,7 +159,8 @@ def test_loader_metadata_matches_the_spec(tmp_path: Path) -> None:
     drawer = next(p for p in spec.parts if p.kind == "drawer" and p.handle != "none")
     names = [obj.mj_model.geom(i).name for i in range(obj.mj_model.ngeom)]
     assert any(n.startswith(f"{drawer.link}/handle") for n in names)
-    assert np.allclose(obj.bounds[0], [-spec.depth / 2, -spec.width / 2, 0.0], atol=1e-6)
+    glide = gen.GLIDE_RADIUS  # the glides stand below the bottom plane
+    assert np.allclose(obj.bounds[0], [-spec.depth / 2, -spec.width / 2, -glide], atol=1e-6)
     assert '<compiler angle="radian"/>' in obj.to_mjcf()
 
 
@@ -438,7 +443,7 @@ def test_add_to_spec_places_objects_in_a_scene(tmp_path: Path, partnet_folder: P
     m = scene.compile()
     data = mujoco.MjData(m)
     mujoco.mj_forward(m, data)
-    assert np.allclose(data.body("cabinet/base").xpos, [1.0, 0.5, 0.0])
+    assert np.allclose(data.body("cabinet/base").xpos, [1.0, 0.5, gen.GLIDE_RADIUS])
     R = data.body("cabinet/base").xmat.reshape(3, 3)
     assert np.allclose(R[:, 0], [0.0, 1.0, 0.0], atol=1e-9)  # the front now faces +y
     assert m.joint("box/joint_3").range == pytest.approx([-0.5, 0.5])

@@ -99,12 +99,13 @@ def test_point_cloud_of_a_known_box_matches_its_geometry() -> None:
 
 
 def test_cabinet_stands_on_its_table_front_behind_the_edge(world) -> None:
+    from strug_manip.objects.generator import GLIDE_RADIUS
     from strug_manip.world.scene import STAND_HEIGHT, STAND_SETBACK
 
     world.reset()
     spec = world.scene.cabinet_spec
     T = world.body_pose("cabinet/base")
-    assert T[2, 3] == pytest.approx(STAND_HEIGHT)
+    assert T[2, 3] == pytest.approx(STAND_HEIGHT + GLIDE_RADIUS)  # on its glides
     front = T[0, 3] - spec.depth / 2  # the cabinet faces -x
     assert front == pytest.approx(world.config.cabinet_distance + STAND_SETBACK)
     table = world.body_pose("cabinet_table")

@@ -154,12 +154,24 @@ KP = {
     "head_pan_joint": 4.0,
     "head_tilt_joint": 8.0,
 }
-#: Velocity-actuator gains of the base [N s/m] or [N m s/rad].
-KV_BASE = {"base_x_joint": 1500.0, "base_y_joint": 1500.0, "base_yaw_joint": 100.0}
+#: Integral time of the torso and arm servos [s] (ki = kp / INTEGRAL_TIME): the Fetch's
+#: joint controllers hold their position under a steady load (up to the effort limit)
+#: rather than giving way by load / kp; a steady error is pushed against with the
+#: proportional force again every 0.3 s, slow enough not to excite the arm.
+INTEGRAL_TIME = 0.3
+#: Position gains of the base servos [N/m] or [N m/rad]: x, y as the velocity loop of
+#: the previous model (1500 N s/m) closed by a 3 1/s position loop, as the Fetch's base
+#: controller tracks where the navigation stack sends it; yaw stiffer (a standing
+#: differential drive turns only as its wheels roll: the arm's reaction torques must
+#: not swing it); force limited at the wheels' 300 N and 55 N m (EFFORT).
+KP_BASE = {"base_x_joint": 4500.0, "base_y_joint": 4500.0, "base_yaw_joint": 3000.0}
 #: Gripper: one position actuator on the tendon 0.5 (q_l + q_r) [m] (finger travel,
 #: 0 closed, 0.05 open); the two fingers are coupled by an equality constraint. The
 #: tendon force is split 50/50, so forcerange +-120 N gives fetch_ros's 60 N per finger,
-#: reached for a position error of 120 / 10000 = 12 mm.
+#: reached for a position error of 120 / 10000 = 12 mm. The command range reaches 5 cm
+#: below the closed stop: a grip commands a target inside whatever is held, and the
+#: servo squeezes with its full force (the Fetch's gripper closes with a force, not to a
+#: width), whatever the handle's radius.
 GRIPPER_KP = 10000.0
 GRIPPER_FORCE = 120.0
 FINGER_MASS = 0.0798  # [kg] fetch_ros (gymnasium-robotics uses 4 kg for mocap stability)
@@ -179,13 +191,15 @@ URDF_BASE_LIMIT = 100.0
 
 #: ``home``: Fetch's tuck pose (fetch_teleop ``tuck_arm.py``: 1.32, 1.40, -0.2, 1.72, 0,
 #: 1.66, 0) with wrist_flex 1.56 instead of 1.66, which clears the convex hull of
-#: ``torso_lift_link`` by 1 cm (MuJoCo collides convex hulls); torso down, head level,
+#: ``torso_lift_link`` by 1 cm (MuJoCo collides convex hulls); the torso raised 0.3 m
+#: (the arm leaves its tuck from there without touching the base, and the torso, the
+#: robot's slowest joint at 0.1 m/s, is near the heights the arm works at), head level,
 #: gripper open. The tucked arm stays out of the head camera's view.
 HOME = {
     "base_x_joint": 0.0,
     "base_y_joint": 0.0,
     "base_yaw_joint": 0.0,
-    "torso_lift_joint": 0.0,
+    "torso_lift_joint": 0.3,
     "head_pan_joint": 0.0,
     "head_tilt_joint": 0.0,
     "shoulder_pan_joint": 1.32,
@@ -553,7 +567,19 @@ def write_mjcf(base: Body, meshes: dict[str, str], header: str) -> str:
     vis = _sub(fetch, "default", class_="visual")
     _sub(vis, "geom", contype="0", conaffinity="0", group="2")
     fin = _sub(fetch, "default", class_="finger")
-    _sub(fin, "geom", type="box", material="grey", condim="4", friction="1 0.05 0.01")
+    # Rubber pads: friction 1 (rubber on dry wood or metal: 0.6-1.0), torsional friction
+    # (condim 4), and stiff contacts (a 2-step time constant) so a squeezed handle does
+    # not sink into the pads.
+    _sub(
+        fin,
+        "geom",
+        type="box",
+        material="grey",
+        condim="4",
+        friction="1 0.05 0.01",
+        solref="0.004 1",
+        solimp="0.95 0.99 0.001",
+    )
 
     asset = _sub(root, "asset")
     for name, rgba in MATERIALS.items():
@@ -628,20 +654,9 @@ def write_mjcf(base: Body, meshes: dict[str, str], header: str) -> str:
     _sub(eq, "joint", joint1=FINGER_JOINTS[0], joint2=FINGER_JOINTS[1], solimp="0.95 0.99 0.001")
 
     act = _sub(root, "actuator")
-    for j in BASE_JOINTS:
-        v = VELOCITY[j]
-        _sub(
-            act,
-            "velocity",
-            name=j.removesuffix("_joint"),
-            joint=j,
-            kv=f(KV_BASE[j]),
-            ctrlrange=fs((-v, v)),
-            forcerange=fs((-EFFORT[j], EFFORT[j])),
-        )
     ranges = {j.name: j.range for b in base.walk() for j in b.joints}
-    for j in ("torso_lift_joint", *ARM_JOINTS):
-        _position(act, j, ranges[j])
+    for j in (*BASE_JOINTS, "torso_lift_joint", *ARM_JOINTS):
+        _servo(act, j, ranges.get(j) or (-URDF_BASE_LIMIT, URDF_BASE_LIMIT))
     _sub(
         act,
         "position",
@@ -649,7 +664,7 @@ def write_mjcf(base: Body, meshes: dict[str, str], header: str) -> str:
         tendon="gripper",
         kp=f(GRIPPER_KP),
         dampratio="1",
-        ctrlrange=fs((0.0, GRIPPER_OPEN)),
+        ctrlrange=fs((-GRIPPER_OPEN, GRIPPER_OPEN)),
         forcerange=fs((-GRIPPER_FORCE, GRIPPER_FORCE)),
     )
     for j in HEAD_JOINTS:
@@ -678,6 +693,30 @@ def _position(act: ET.Element, joint: str, rng: tuple[float, float] | None) -> N
         joint=joint,
         kp=f(KP[joint]),
         dampratio="1",
+        ctrlrange=fs(rng),
+        forcerange=fs((-EFFORT[joint], EFFORT[joint])),
+    )
+
+
+def _servo(act: ET.Element, joint: str, rng: tuple[float, float] | None) -> None:
+    """A position servo with integral action (MuJoCo's PID actuator): force =
+    kp (ctrl - q) - kv qdot + ki * integral of (ctrl - q), clamped at the effort limit,
+    the integral clamped so that it alone asks for at most the effort limit."""
+    if rng is None:
+        raise SystemExit(f"{joint} needs a range for its servo")
+    kp = KP[joint] if joint in KP else KP_BASE[joint]
+    ki = kp / INTEGRAL_TIME
+    _sub(
+        act,
+        "general",
+        name=joint.removesuffix("_joint"),
+        joint=joint,
+        dyntype="pid",
+        dynprm=f(EFFORT[joint] / ki),
+        gaintype="pid",
+        gainprm=f(ki),
+        biastype="affine",
+        biasprm=fs((0.0, -kp, 1.0)),  # biasprm[2] > 0: a damping ratio (critical)
         ctrlrange=fs(rng),
         forcerange=fs((-EFFORT[joint], EFFORT[joint])),
     )

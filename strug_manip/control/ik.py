@@ -12,7 +12,15 @@ quadratic program (solver ``daqp``) with
 * a :class:`mink.ConfigurationLimit` (joint limits) and, optionally, a
   :class:`mink.CollisionAvoidanceLimit` between the given geom groups,
 * the joints that do not take part (base unless ``include_base``, head, fingers) held
-  by a :class:`mink.DofFreezingTask` equality constraint.
+  by a :class:`mink.DofFreezingTask` equality constraint;
+* with ``include_base``, a :class:`mink.DampingTask` that makes base motion
+  ``base_cost`` times dearer than arm motion, so the base moves only where the arm
+  alone cannot follow.
+
+:meth:`FetchIK.solve` finds one key pose (with random restarts); :meth:`FetchIK.track`
+follows a dense Cartesian line of poses, warm started from the previous solution
+(no restarts, no posture), so consecutive solutions stay on one IK branch: the
+controllers' approach, opening and retreat motions.
 
 The moving joints are the torso and the 7 arm joints (and the planar base joints with
 ``include_base=True``). A solve that stalls restarts from random configurations within
@@ -42,9 +50,10 @@ from planners.errors import (
     check_positive_float,
     check_positive_int,
 )
+from strug_manip.objects.hypotheses import check_pose
 from strug_manip.robot.fetch import (
     ALL_JOINTS,
-    ARM_JOINTS,
+    ARM_TORSO_JOINTS,
     BASE_JOINTS,
     FETCH_XML,
     GRIPPER_SITE,
@@ -69,8 +78,14 @@ READY_POSTURE: dict[str, float] = {
 COLLISION_DETECTION = 0.15
 #: Tolerance of the collision check of a solution, below ``collision_margin`` [m].
 COLLISION_TOL = 1e-3
-#: Joints the IK moves by default: torso + 7 arm joints.
-IK_JOINTS: tuple[str, ...] = (TORSO_JOINT, *ARM_JOINTS)
+#: Distance the solutions keep from the joint limits [rad or m]: a servo commanded onto
+#: a limit overshoots it under load.
+LIMIT_MARGIN = 0.01
+#: Relative cost of torso motion along a tracked line [-] (the torso is slow).
+TORSO_COST = 100.0
+#: Largest joint step between two consecutive poses of a tracked line [rad or m]: a
+#: bigger one is a jump to another IK branch, not a continuous motion.
+TRACK_MAX_STEP = 0.35
 
 #: A collision pair for :class:`mink.CollisionAvoidanceLimit`: two groups of geom names
 #: (or ids) to keep apart.
@@ -104,6 +119,28 @@ class IKResult:
     attempts: int = 1
 
 
+@dataclass(frozen=True)
+class TrackResult:
+    """Outcome of one :meth:`FetchIK.track`.
+
+    Attributes:
+        q: the solutions of the poses reached, shape (K, n) in
+            :attr:`FetchIK.active_joints` order [m or rad] (K = all poses on success).
+        success: every pose was reached, continuously.
+        failed_at: index of the first pose not reached (-1 on success).
+        position_error, rotation_error: the largest residual over the poses tried
+            [m], [rad].
+        seconds: wall time [s].
+    """
+
+    q: np.ndarray
+    success: bool
+    failed_at: int
+    position_error: float
+    rotation_error: float
+    seconds: float
+
+
 def body_geoms(model: mujoco.MjModel, bodies: Sequence[str]) -> list[int]:
     """Ids of the geoms attached to ``bodies`` (names), for ``collision_pairs``.
 
@@ -129,33 +166,6 @@ def _rotation_angle(R: np.ndarray) -> float:
     return 2.0 * math.atan2(float(np.linalg.norm(quat[1:])), abs(float(quat[0])))
 
 
-def check_pose(name: str, T: object) -> np.ndarray:
-    """Return ``T`` as a float (4, 4) rigid transform, or raise :class:`ConfigError`.
-
-    Checks shape, finiteness, the last row ``(0, 0, 0, 1)`` and that the rotation block
-    is orthonormal with determinant +1 (to 1e-6).
-    """
-    try:
-        arr = np.asarray(T, dtype=float)
-    except (TypeError, ValueError):
-        raise ConfigError(f"{name} must be a 4x4 homogeneous transform [m], got {T!r}") from None
-    if arr.shape != (4, 4):
-        raise ConfigError(
-            f"{name} must be a 4x4 homogeneous transform [m], got shape {arr.shape}: {T!r}"
-        )
-    if not np.all(np.isfinite(arr)):
-        raise ConfigError(f"{name} must be finite, got {arr.tolist()!r}")
-    if not np.allclose(arr[3], (0.0, 0.0, 0.0, 1.0), atol=1e-9):
-        raise ConfigError(f"{name} must end with the row (0, 0, 0, 1), got {arr[3].tolist()!r}")
-    R = arr[:3, :3]
-    if not np.allclose(R.T @ R, np.eye(3), atol=1e-6) or np.linalg.det(R) < 0:
-        raise ConfigError(
-            f"the rotation block of {name} must be a rotation matrix (orthonormal, det +1), "
-            f"got {R.tolist()!r}"
-        )
-    return arr
-
-
 class FetchIK:
     """Gripper-pose inverse kinematics of the Fetch with mink.
 
@@ -164,6 +174,8 @@ class FetchIK:
             ``fetch.xml``), e.g. the scene's model to avoid collisions with the
             cabinet; default: ``models/fetch/fetch.xml`` (robot only, fastest).
         include_base: also move the planar base joints (x [m], y [m], yaw [rad]).
+        base_cost: with ``include_base``, the cost of base motion relative to arm
+            motion (a :class:`mink.DampingTask`) [-].
         posture: the comfortable posture, by name (default :data:`READY_POSTURE`);
             joints not given keep their initial value as posture target.
         position_cost: weight of the gripper position error [1/m].
@@ -190,6 +202,7 @@ class FetchIK:
         model: mujoco.MjModel | None = None,
         *,
         include_base: bool = False,
+        base_cost: float = 10.0,
         posture: Mapping[str, float] | None = None,
         position_cost: float = 1.0,
         orientation_cost: float = 0.5,
@@ -221,7 +234,7 @@ class FetchIK:
         self.model = model
         joint_names = [model.joint(i).name for i in range(model.njnt)]
         self.active_joints: tuple[str, ...] = (
-            (*BASE_JOINTS, *IK_JOINTS) if include_base else IK_JOINTS
+            (*BASE_JOINTS, *ARM_TORSO_JOINTS) if include_base else ARM_TORSO_JOINTS
         )
         for name in self.active_joints:
             if name not in joint_names:
@@ -265,7 +278,9 @@ class FetchIK:
             lm_damping=1.0,
         )
         self._posture_task = mink.PostureTask(model, cost=posture_cost)
-        self._limits: list[mink.Limit] = [mink.ConfigurationLimit(model)]
+        self._limits: list[mink.Limit] = [
+            mink.ConfigurationLimit(model, min_distance_from_limits=LIMIT_MARGIN)
+        ]
         self.collision_margin = collision_margin
         self._geom_pairs: list[tuple[int, int]] = []
         if collision_pairs:
@@ -282,6 +297,21 @@ class FetchIK:
             self._limits.append(limit)
             self._geom_pairs = [(int(a), int(b)) for a, b in limit.geom_id_pairs]
         self._constraints = [mink.DofFreezingTask(model, frozen)] if frozen else []
+        self._damping_tasks: list[mink.Task] = []
+        if include_base:
+            cost = np.full(model.nv, 1e-3)
+            base_cost = check_positive_float("base_cost", base_cost)
+            for j in BASE_JOINTS:
+                cost[model.jnt_dofadr[model.joint(j).id]] = 1e-3 * base_cost
+            self._damping_tasks = [mink.DampingTask(model, cost)]
+        # Lines leave the torso alone where the arm can follow (it is 10x slower than
+        # the arm joints: 0.1 m/s), as the base where the arm alone can.
+        cost = np.full(model.nv, 1e-3)
+        cost[model.jnt_dofadr[model.joint(TORSO_JOINT).id]] = 1e-3 * TORSO_COST
+        if include_base:
+            for j in BASE_JOINTS:
+                cost[model.jnt_dofadr[model.joint(j).id]] = 1e-3 * base_cost
+        self._line_tasks: list[mink.Task] = [mink.DampingTask(model, cost)]
 
     # -- helpers -------------------------------------------------------------------------
 
@@ -301,15 +331,18 @@ class FetchIK:
         return out
 
     def _clip_into_limits(self, q: np.ndarray) -> None:
-        """Clip every limited hinge/slide joint of qpos ``q`` (nq,) into its range."""
+        """Clip every limited hinge/slide joint of qpos ``q`` (nq,) into its range, at
+        least :data:`LIMIT_MARGIN` inside it (where the limit constraint is satisfied)."""
         m = self.model
         for jid in range(m.njnt):
-            if m.jnt_limited[jid] and m.jnt_type[jid] in (
-                mujoco.mjtJoint.mjJNT_HINGE,
-                mujoco.mjtJoint.mjJNT_SLIDE,
+            if m.jnt_limited[jid] and int(m.jnt_type[jid]) in (
+                int(mujoco.mjtJoint.mjJNT_HINGE),
+                int(mujoco.mjtJoint.mjJNT_SLIDE),
             ):
                 a = m.jnt_qposadr[jid]
-                q[a] = min(max(q[a], m.jnt_range[jid, 0]), m.jnt_range[jid, 1])
+                lo, hi = m.jnt_range[jid]
+                margin = min(LIMIT_MARGIN, 0.25 * (hi - lo))
+                q[a] = min(max(q[a], lo + margin), hi - margin)
 
     def _errors(self, p_goal: np.ndarray, R_goal: np.ndarray) -> tuple[float, float]:
         """(position error [m], rotation error [rad]) of the gripper at the current q."""
@@ -348,6 +381,16 @@ class FetchIK:
         T[:3, :3] = d.site_xmat[self._site].reshape(3, 3)
         T[:3, 3] = d.site_xpos[self._site]
         return T
+
+    def jacobian(self, q: Mapping[str, float]) -> np.ndarray:
+        """The TCP's Jacobian at ``q`` (by name; unset joints: home/ready), shape
+        (6, nv): rows linear [m] then angular [rad] velocity in world axes per unit
+        velocity of each of the model's dofs (``model.jnt_dofadr`` indexes them)."""
+        self.forward(q)
+        m, d = self.model, self._config.data
+        jacp, jacr = np.zeros((3, m.nv)), np.zeros((3, m.nv))
+        mujoco.mj_jacSite(m, d, jacp, jacr, self._site)
+        return np.vstack([jacp, jacr])
 
     # -- solve ---------------------------------------------------------------------------
 
@@ -401,8 +444,8 @@ class FetchIK:
         for j, v in self.posture.items():
             posture_q[self._qadr[j]] = v
         self._posture_task.set_target(posture_q)
-        with_posture = [self._frame, self._posture_task]
-        frame_only = [self._frame]
+        with_posture = [self._frame, self._posture_task, *self._damping_tasks]
+        frame_only = [self._frame, *self._damping_tasks]
         near_rot = 10.0 * self.posture_until
 
         rng = np.random.default_rng(self.seed)
@@ -469,4 +512,92 @@ class FetchIK:
             iterations=iterations,
             seconds=time.perf_counter() - t0,
             attempts=attempts,
+        )
+
+    def track(
+        self,
+        poses: Sequence[np.ndarray],
+        q_init: Mapping[str, float],
+        *,
+        pos_tol: float = 2e-3,
+        rot_tol: float = 2e-2,
+        max_iters: int = 25,
+    ) -> TrackResult:
+        """Follow a dense Cartesian line: joint positions for each pose of ``poses``.
+
+        Each pose is solved warm started from the previous solution (the first from
+        ``q_init``), without restarts or posture, so the solutions form one continuous
+        motion; a pose missed by more than the tolerances, or a joint step above
+        :data:`TRACK_MAX_STEP` between two poses, ends the line.
+
+        Args:
+            poses: gripper targets ``T_world_gripper``, each (4, 4) [m], a few
+                centimetres apart.
+            q_init: the configuration the line starts from, by name [m or rad].
+            pos_tol, rot_tol: tolerances per pose [m], [rad].
+            max_iters: QP iterations per pose.
+
+        Returns:
+            A :class:`TrackResult` (the solutions of the poses reached).
+
+        Raises:
+            ConfigError: a pose is not a rigid transform, or a bad option.
+        """
+        t0 = time.perf_counter()
+        targets = [check_pose(f"poses[{k}]", T) for k, T in enumerate(poses)]
+        pos_tol = check_positive_float("pos_tol", pos_tol)
+        rot_tol = check_positive_float("rot_tol", rot_tol)
+        max_iters = check_positive_int("max_iters", max_iters)
+        q = self._q_default.copy()
+        for j, v in self._check_q("q_init", q_init).items():
+            q[self._qadr[j]] = v
+        self._clip_into_limits(q)
+        config = self._config
+        config.update(q)
+        tasks = [self._frame, *self._line_tasks]
+        out: list[np.ndarray] = []
+        worst = (0.0, 0.0)
+        prev = q[self._active_qadr].copy()
+        for k, T in enumerate(targets):
+            self._frame.set_target(mink.SE3.from_matrix(T))
+            p_goal, R_goal = T[:3, 3], T[:3, :3]
+            ep, er = self._errors(p_goal, R_goal)
+            for _ in range(max_iters):
+                if ep <= pos_tol and er <= rot_tol:
+                    break
+                try:
+                    v = mink.solve_ik(
+                        config,
+                        tasks,
+                        1.0,
+                        self.solver,
+                        damping=self.damping,
+                        limits=self._limits,
+                        constraints=self._constraints,
+                    )
+                except mink.NoSolutionFound:
+                    break
+                config.integrate_inplace(v, 1.0)
+                ep, er = self._errors(p_goal, R_goal)
+            now = config.q[self._active_qadr].copy()
+            jump = float(np.max(np.abs(now - prev)))
+            if ep > pos_tol or er > rot_tol or jump > TRACK_MAX_STEP:
+                return TrackResult(
+                    np.array(out).reshape(len(out), len(self.active_joints)),
+                    False,
+                    k,
+                    max(worst[0], ep),
+                    max(worst[1], er),
+                    time.perf_counter() - t0,
+                )
+            worst = (max(worst[0], ep), max(worst[1], er))
+            out.append(now)
+            prev = now
+        return TrackResult(
+            np.array(out).reshape(len(out), len(self.active_joints)),
+            True,
+            -1,
+            worst[0],
+            worst[1],
+            time.perf_counter() - t0,
         )

@@ -34,7 +34,11 @@ Carcass:
 - wall, top, bottom and divider thickness ``t`` in [0.015, 0.020] m, back panel
   thickness in [0.004, 0.008] m;
 - plinth (bottom panel raised on a recessed kick board): none with probability 0.5,
-  else a height in [0.03, 0.08] m.
+  else a height in [0.03, 0.08] m;
+- four glides (furniture feet: :data:`GLIDE_RADIUS` balls under the corners, inset
+  :data:`GLIDE_INSET`, centred on the bottom plane), on which the carcass stands
+  :data:`GLIDE_RADIUS` high: it touches its table at four points (the boards' edges
+  would make a dozen contacts). The object frame's origin stays on the bottom plane.
 
 Grid: cell widths in [0.20, 0.60] m and cell heights in [0.12, 0.45] m; the number of
 columns (1..3) and rows (1..4) is drawn uniformly among the counts that fit those
@@ -61,8 +65,10 @@ so a hanging flap rests shut rather than sagging open), axis ``e × n`` (``e`` t
 from the hinge to the free edge, ``n = +x``) so that a positive angle opens outward;
 limits ``[0, u]`` with ``u`` in [1.57, 2.10] rad (side hinges) or [1.20, 1.57] rad (top
 and bottom hinges); damping in [0.05, 0.50] N m s/rad, friction in [0.05, 0.30] N m.
-Bottom-hinged (drop-down) doors get a friction stay instead: friction = [1.3, 2.0] ×
-the door's gravity torque when horizontal, so they stay shut under gravity.
+Top- and bottom-hinged flaps get a friction stay instead (a lift-up or drop-down flap
+fitting): friction = [1.3, 2.0] × the flap's gravity torque when horizontal, so a flap
+stays where it is put, shut or open (without one, a lifted top flap falls shut as soon
+as it is let go, and a drop-down door falls open).
 
 Panel: a fixed front board. Shelf: an open cell whose link is an 8 mm shelf board
 lying on the cell floor (the surface an object is placed on).
@@ -128,6 +134,8 @@ WALL_RANGE = (0.015, 0.020)
 BACK_RANGE = (0.004, 0.008)
 PLINTH_RANGE = (0.03, 0.08)
 PLINTH_PROB = 0.5
+GLIDE_RADIUS = 0.006
+GLIDE_INSET = 0.01
 CELL_WIDTH_RANGE = (0.20, 0.60)
 CELL_HEIGHT_RANGE = (0.12, 0.45)
 MAX_COLS = 3
@@ -146,7 +154,7 @@ DOOR_SIDE_LIMIT = (1.57, 2.10)
 DOOR_FLAP_LIMIT = (1.20, 1.57)
 DOOR_DAMPING = (0.05, 0.50)
 DOOR_FRICTION = (0.05, 0.30)
-DROP_DOOR_HOLD = (1.3, 2.0)
+FLAP_STAY_HOLD = (1.3, 2.0)
 SHELF_BOARD = 0.008
 BAR_RADIUS = (0.005, 0.008)
 BAR_LENGTH = (0.08, 0.20)
@@ -174,20 +182,21 @@ _METAL = (0.72, 0.72, 0.75, 1.0)
 
 @dataclass(frozen=True)
 class Geom:
-    """A box or cylinder in a link frame.
+    """A box, cylinder or sphere in a link frame.
 
     Attributes:
         name: unique within the link; handle geometry is named ``handle*``.
-        shape: ``"box"`` or ``"cylinder"``.
+        shape: ``"box"``, ``"cylinder"`` or ``"sphere"``.
         pos: centre in the link frame, shape (3,) [m].
-        size: box full extents (3,) [m], or cylinder ``(radius, length)`` (2,) [m].
+        size: box full extents (3,) [m], cylinder ``(radius, length)`` (2,) [m], or
+            sphere ``(radius,)`` [m].
         axis: cylinder axis, ``"x"``, ``"y"`` or ``"z"`` (ignored for boxes).
         material: ``"wood"`` or ``"metal"`` (selects the density).
         rgba: colour, shape (4,).
     """
 
     name: str
-    shape: Literal["box", "cylinder"]
+    shape: Literal["box", "cylinder", "sphere"]
     pos: tuple[float, float, float]
     size: tuple[float, ...]
     axis: Literal["x", "y", "z"] = "z"
@@ -198,6 +207,8 @@ class Geom:
         """Volume [m^3]."""
         if self.shape == "box":
             return float(np.prod(self.size))
+        if self.shape == "sphere":
+            return 4.0 / 3.0 * math.pi * self.size[0] ** 3
         r, length = self.size
         return math.pi * r * r * length
 
@@ -206,6 +217,8 @@ class Geom:
         if self.shape == "box":
             a, b, c = self.size
             return mass / 12.0 * np.diag([b * b + c * c, a * a + c * c, a * a + b * b])
+        if self.shape == "sphere":
+            return 0.4 * mass * self.size[0] ** 2 * np.eye(3)
         r, length = self.size
         perp = mass * (3 * r * r + length * length) / 12.0
         diag = [perp, perp, perp]
@@ -535,6 +548,9 @@ def generate_cabinet(
     ]
     if plinth > 0:
         body.append(_box("kick", (xf - 0.03 - t, y_lo, 0.0), (xf - 0.03, y_hi, plinth), body_rgba))
+    for i, (sx, sy) in enumerate(((1, 1), (1, -1), (-1, 1), (-1, -1))):
+        center = (sx * (0.5 * D - GLIDE_INSET), sy * (0.5 * W - GLIDE_INSET), 0.0)
+        body.append(Geom(f"glide_{i}", "sphere", center, (GLIDE_RADIUS,), rgba=(0.2, 0.2, 0.2, 1)))
     # Cell boundaries: rows from the top, columns from the viewer's left (-y).
     z_edges, z = [], z_top
     for h in row_heights:
@@ -591,10 +607,10 @@ def generate_cabinet(
     parts = []
     for d in drafts:
         inertial = _inertial(d["geoms"], densities)
-        if d["kind"] == "door" and d["hinge"] == "bottom":
-            # Friction stay: hold the drop-down door against gravity when horizontal.
+        if d["kind"] == "door" and d["hinge"] in ("top", "bottom"):
+            # Friction stay: hold the flap against gravity, even horizontal.
             lever = abs(float(inertial.com[2]))
-            d["friction"] = _uniform(rng, DROP_DOOR_HOLD) * inertial.mass * GRAVITY * lever
+            d["friction"] = _uniform(rng, FLAP_STAY_HOLD) * inertial.mass * GRAVITY * lever
         parts.append(_finish_part(d, inertial))
     return CabinetSpec(
         seed=int(seed),

@@ -180,15 +180,70 @@ def believed_spec(
     else:
         upper = BELIEVED_PRISMATIC_UPPER if joint.type == "prismatic" else BELIEVED_REVOLUTE_UPPER
     lower = min(float(part.lower) if same else 0.0, float(q), 0.0)
+    kind = "drawer" if joint.type == "prismatic" else "door"
     new = dataclasses.replace(
         part,
+        kind=kind,
+        semantic=kind,
         joint_type=joint.type,
         axis=axis,
         origin=origin,
         lower=lower,
         upper=upper,
+        hinge=hinge_side(part, axis, origin) if joint.type == "revolute" else None,
         geoms=geoms,
         inertial=inertial,
     )
     parts = tuple(new if p.link == link else p for p in spec.parts)
     return dataclasses.replace(spec, parts=parts)
+
+
+def hinge_side(part: PartSpec, axis: np.ndarray, origin: np.ndarray) -> str:
+    """Which edge of ``part``'s cell a hinge (unit ``axis`` (3,) through ``origin`` (3,),
+    object frame) is on: ``left``/``right`` (seen from the front: -y/+y) for a vertical
+    axis, ``top``/``bottom`` for a horizontal one."""
+    c = np.asarray(part.cell_center, dtype=float)
+    if abs(float(axis[2])) > abs(float(axis[1])):
+        return "left" if origin[1] < c[1] else "right"
+    return "top" if origin[2] > c[2] else "bottom"
+
+
+#: Every kinematic model a front in a cell can have: a drawer, or a door hinged on one
+#: of the cell's four edges.
+CELL_MODELS: tuple[str, ...] = ("drawer", "left", "right", "top", "bottom")
+
+
+def cell_joints(part: PartSpec, limit: float = math.inf) -> dict[str, BelievedJoint]:
+    """The joint of each model of :data:`CELL_MODELS` for ``part``'s cell, in the object
+    frame, with the part closed: a drawer sliding out of the front, or a door hinged on
+    the cell's left, right, top or bottom edge on the front plane (the top hinge on the
+    panel's back face, as the generator makes it), opening outward; ``limit`` the travel.
+
+    Raises:
+        ConfigError: ``part`` is not a movable front (a shelf has no front).
+    """
+    if not isinstance(part, PartSpec) or part.kind not in ("drawer", "door", "panel"):
+        raise ConfigError(f"part must be a drawer, door or panel, got {part!r}")
+    c = np.asarray(part.cell_center, dtype=float)
+    w, h = (float(v) for v in part.cell_size)
+    x = np.array([1.0, 0.0, 0.0])
+    t = float(part.geoms[0].size[0])  # the front's thickness
+    edges = {
+        "left": (np.array([0.0, 1.0, 0.0]), c + np.array([0.0, -w / 2, 0.0])),
+        "right": (np.array([0.0, -1.0, 0.0]), c + np.array([0.0, w / 2, 0.0])),
+        "bottom": (np.array([0.0, 0.0, 1.0]), c + np.array([0.0, 0.0, -h / 2])),
+        "top": (np.array([0.0, 0.0, -1.0]), c + np.array([-t, 0.0, h / 2])),
+    }
+    out = {"drawer": BelievedJoint("prismatic", x, c, limit)}
+    for name, (e, origin) in edges.items():
+        out[name] = BelievedJoint("revolute", np.cross(e, x), origin, limit)
+    return out
+
+
+def model_of(part: PartSpec) -> str:
+    """Which of :data:`CELL_MODELS` ``part`` is (``drawer`` or its door's hinge side)."""
+    if part.joint_type == "prismatic":
+        return "drawer"
+    if part.hinge is None:
+        raise ConfigError(f"part {part.link} ({part.kind}) has no kinematic model")
+    return part.hinge

@@ -36,7 +36,8 @@ MuJoCo conversion (documented choices)
   wood/laminate on a hard floor) and ``priority=1`` so that value, not MuJoCo's
   max-of-pair rule, decides friction against the floor.
 - Joint ``<dynamics damping friction>`` become MuJoCo ``damping`` and
-  ``frictionloss``; ``<limit>`` becomes ``range`` (``continuous``: unlimited). Limits
+  ``frictionloss`` (stiff, as the limits: a load below the friction does not make the
+  joint creep); ``<limit>`` becomes ``range`` (``continuous``: unlimited). Limits
   are *hard stops* (:data:`LIMIT_SOLREF`, :data:`LIMIT_SOLIMP`: the stiffest constraint
   MuJoCo integrates stably at a 2 ms step): the parts' contacts with their own carcass
   are excluded (fronts sit in their openings with millimetre gaps), so the joint limit
@@ -107,6 +108,8 @@ _CYL_RPY = {"x": (0.0, math.pi / 2, 0.0), "y": (math.pi / 2, 0.0, 0.0), "z": (0.
 def _geom_xml(g: Geom, material: str) -> str:
     if g.shape == "box":
         shape, rpy = f'<box size="{_v(g.size)}"/>', (0.0, 0.0, 0.0)
+    elif g.shape == "sphere":
+        shape, rpy = f'<sphere radius="{_f(g.size[0])}"/>', (0.0, 0.0, 0.0)
     else:
         shape = f'<cylinder radius="{_f(g.size[0])}" length="{_f(g.size[1])}"/>'
         rpy = _CYL_RPY[g.axis]
@@ -1020,6 +1023,10 @@ def _build(
                 mj.range = [j.lower * scale, j.upper * scale]
                 mj.solref_limit = list(LIMIT_SOLREF)
                 mj.solimp_limit = list(LIMIT_SOLIMP)
+            # Stiff dry friction too: a soft friction constraint lets a flap on its stay
+            # creep shut (or a drawer roll) under a load below its friction.
+            mj.solref_friction = list(LIMIT_SOLREF)
+            mj.solimp_friction = list(LIMIT_SOLIMP)
         add_geoms(body, link)
         set_inertial(body, link, moving=j.movable)
         bodies[j.child] = body

@@ -8,7 +8,8 @@ a wrong pull drags it across the table top, or off it. This is the paper's setti
 small storage cabinet standing on a table; see the generator's docstring for the
 cabinets drawn). ``stand_height=0`` puts the cabinet on the floor instead.
 
-A second table stands to the robot's right (-y) with a spam-can-sized box on it (YCB's
+A second table stands to the robot's right (-y), a little behind it, with a
+spam-can-sized box on it (YCB's
 potted meat can, 0.10 x 0.06 x 0.085 m, 0.37 kg). An ``overview`` camera looks at the
 whole scene; the robot's ``head_camera`` is its RGB-D sensor. Shadows are off (the floor
 light casts none) for speed.
@@ -24,14 +25,16 @@ the robot base against the world (its wheels only touch the floor visually).
 
 from __future__ import annotations
 
+import functools
 import math
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import mujoco
 import numpy as np
 
-from planners.errors import ConfigError, check_positive_float
+from planners.errors import ConfigError, UnknownNameError, check_positive_float
 from strug_manip.objects import (
     ArticulatedObject,
     CabinetSpec,
@@ -40,12 +43,17 @@ from strug_manip.objects import (
     load_articulated_object,
     load_cabinet_spec,
 )
-from strug_manip.robot.fetch import FETCH_SCENE_XML, HOME_KEYFRAME
+from strug_manip.robot.fetch import FETCH_SCENE_XML, GRIPPER_JOINTS, HOME_KEYFRAME
+from strug_manip.world.floating_gripper import add_floating_gripper
 
 #: Half sizes of the graspable object [m] (YCB potted meat can: 0.10 x 0.06 x 0.085 m).
 OBJECT_HALF_SIZE = (0.05, 0.03, 0.0425)
 #: Its mass [kg].
 OBJECT_MASS = 0.37
+#: Where it stands on the table, from the table's centre [m]: near the corner the
+#: robot comes to, 0.1 m in from both edges, so it can be taken from above or, level,
+#: from the side.
+OBJECT_ON_TABLE = (0.2, 0.25)
 #: Table top height [m], half extents of the top [m].
 TABLE_HEIGHT = 0.72
 TABLE_HALF = (0.30, 0.40, 0.02)
@@ -62,6 +70,8 @@ STAND_THICKNESS = 0.03
 STAND_SETBACK = 0.02
 #: Sliding friction of the cabinet on its table (dry wood on wood: 0.25-0.5) [-].
 CABINET_FRICTION = 0.4
+#: What can stand in front of the cabinet: the Fetch, or its floating hand (the twin).
+ROBOTS: tuple[str, ...] = ("fetch", "gripper")
 
 
 @dataclass(frozen=True)
@@ -80,14 +90,18 @@ class SceneConfig:
         cabinet_lateral: lateral offset of the cabinet (+y) [m].
         stand_height: height of the cabinet table's top [m]; 0 stands the cabinet on
             the floor (no table; floor friction: the loader's, 0.5).
-        table_xy: position of the table centre [m].
+        table_xy: position of the (object) table's centre [m]: to the robot's right and
+            a little behind it, clear of the floor in front of the cabinet where the
+            robot stands to open doors that swing toward it.
         timestep: physics step [s].
         width, height: camera image size [px].
         cabinet_spec: a cabinet to build instead of generating one from
             ``cabinet_seed`` (e.g. a belief particle: the generator's spec with some
             parts' joints replaced, see
-            :func:`strug_manip.control.controllers.believed_spec`); excludes
+            :func:`strug_manip.objects.hypotheses.believed_spec`); excludes
             ``cabinet_folder``. Not compared or hashed.
+        robot: ``fetch`` (the robot) or ``gripper`` (its floating hand alone: the
+            skills' planning twin, :mod:`strug_manip.world.floating_gripper`).
     """
 
     cabinet_seed: int = 3
@@ -96,13 +110,16 @@ class SceneConfig:
     cabinet_distance: float = 1.0
     cabinet_lateral: float = 0.0
     stand_height: float = STAND_HEIGHT
-    table_xy: tuple[float, float] = (0.45, -0.85)
+    table_xy: tuple[float, float] = (-0.15, -1.05)
     timestep: float = 0.002
     width: int = 320
     height: int = 240
     cabinet_spec: CabinetSpec | None = field(default=None, compare=False)
+    robot: str = "fetch"
 
     def __post_init__(self) -> None:
+        if self.robot not in ROBOTS:
+            raise UnknownNameError("robot", self.robot, ROBOTS)
         if self.cabinet_spec is not None:
             if not isinstance(self.cabinet_spec, CabinetSpec):
                 raise ConfigError(
@@ -151,6 +168,21 @@ def look_at_xyaxes(eye: tuple[float, ...], target: tuple[float, ...]) -> list[fl
     return [*right.tolist(), *up.tolist()]
 
 
+def _remove_robot(spec: mujoco.MjSpec) -> None:
+    """Take the Fetch out of the scene spec (its body tree, actuators, tendons, contact
+    rules, meshes and materials), keeping the floor, the light and the sky."""
+    spec.delete(spec.body("base_link"))
+    for group in (spec.actuators, spec.tendons, spec.equalities, spec.excludes, spec.sensors):
+        for item in list(group):
+            spec.delete(item)
+    for mesh in list(spec.meshes):
+        spec.delete(mesh)
+    for mat in list(spec.materials):
+        if mat.name != "groundplane":
+            spec.delete(mat)
+
+
+@functools.cache
 def _home_by_name() -> dict[str, float]:
     robot = mujoco.MjModel.from_xml_path(str(FETCH_SCENE_XML))
     key = robot.key(HOME_KEYFRAME)
@@ -202,6 +234,11 @@ def build_scene(config: SceneConfig) -> SceneModel:
             cab_spec = generate_cabinet(config.cabinet_seed, kinds=config.cabinet_kinds)
         cabinet = load_cabinet_spec(cab_spec)
     spec = mujoco.MjSpec.from_file(str(FETCH_SCENE_XML))
+    home = dict(_home_by_name())
+    if config.robot == "gripper":
+        _remove_robot(spec)
+        add_floating_gripper(spec)
+        home = {j: home[j] for j in GRIPPER_JOINTS}
     spec.option.timestep = config.timestep
     spec.visual.global_.offwidth = max(config.width, 1280)
     spec.visual.global_.offheight = max(config.height, 960)
@@ -233,8 +270,8 @@ def build_scene(config: SceneConfig) -> SceneModel:
     obj = world.add_body(
         name="object",
         pos=[
-            config.table_xy[0] - 0.1,
-            config.table_xy[1] + 0.1,
+            config.table_xy[0] + OBJECT_ON_TABLE[0],
+            config.table_xy[1] + OBJECT_ON_TABLE[1],
             TABLE_HEIGHT + OBJECT_HALF_SIZE[2],
         ],
     )
@@ -246,6 +283,10 @@ def build_scene(config: SceneConfig) -> SceneModel:
         mass=OBJECT_MASS,
         rgba=[0.15, 0.35, 0.8, 1],
         friction=[1.0, 0.01, 0.001],
+        # A rigid tin: stiff contacts (as the finger pads'), so a held can does not
+        # creep out of the grasp under its own weight.
+        solref=[0.004, 1.0],
+        solimp=[0.95, 0.99, 0.001, 0.5, 2.0],
     )
 
     # The cabinet faces the robot: its +x (front) points to -x of the world.
@@ -265,11 +306,14 @@ def build_scene(config: SceneConfig) -> SceneModel:
         friction = None
     add_to_spec(spec, cabinet, pos, yaw, free=True, prefix="cabinet/", base_friction=friction)
     eye = (-0.9, 1.5, 1.8)
-    world.add_camera(name="overview", pos=list(eye), xyaxes=look_at_xyaxes(eye, (1.0, -0.35, 0.55)))
-    model = spec.compile()
+    world.add_camera(name="overview", pos=list(eye), xyaxes=look_at_xyaxes(eye, (0.6, -0.5, 0.55)))
+    with warnings.catch_warnings():
+        # The twin's hand is attached without a name prefix (see floating_gripper).
+        warnings.filterwarnings("ignore", message="Attaching a spec with an empty prefix")
+        model = spec.compile()
     T = np.eye(4)
     T[:3, :3] = np.array(
         [[math.cos(yaw), -math.sin(yaw), 0], [math.sin(yaw), math.cos(yaw), 0], [0, 0, 1]]
     )
     T[:3, 3] = pos
-    return SceneModel(model, cabinet, cab_spec, _home_by_name(), "cabinet/", T)
+    return SceneModel(model, cabinet, cab_spec, home, "cabinet/", T)

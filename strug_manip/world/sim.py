@@ -23,6 +23,8 @@ import numpy as np
 
 from planners.errors import ConfigError, UnknownNameError
 from strug_manip.objects import CabinetSpec
+from strug_manip.robot.fetch import GRIPPER_OPEN
+from strug_manip.world.floating_gripper import PARK, SLIDES
 from strug_manip.world.scene import SceneConfig, SceneModel, build_scene
 
 #: The graspable object's free joint (its pose is observed, not believed).
@@ -161,15 +163,27 @@ class ManipulationWorld:
             d.qpos[m.jnt_qposadr[m.joint(name).id]] = q
         for name, q in (part_positions or {}).items():
             self._set_joint(name, q)
-        for a in range(m.nu):
-            jid = m.actuator_trnid[a, 0]
-            # Position actuators (gain > 0, position bias) hold their joint where it is.
-            is_joint = m.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT
-            if is_joint and m.actuator_gainprm[a, 0] > 0 and m.actuator_biasprm[a, 1] != 0:
-                d.ctrl[a] = d.qpos[m.jnt_qposadr[jid]]
+        if self.config.robot == "gripper":
+            adr = [m.jnt_qposadr[m.joint(j).id] for j in SLIDES]
+            d.qpos[adr] = PARK
+        self.hold_position()
         self._fill_gripper_ctrl()
         mujoco.mj_forward(m, d)
         self._cabinet_start = d.xpos[self._cabinet_body].copy()
+
+    def set_parts(self, part_positions: dict[str, float]) -> None:
+        """Put cabinet part joints at ``part_positions`` (by name, [m or rad]), at rest,
+        the rest of the state as it is; then update the kinematics.
+
+        Raises:
+            UnknownNameError: a name is not a cabinet joint (lists them).
+        """
+        m, d = self.model, self.data
+        for name, q in part_positions.items():
+            self._set_joint(name, q)
+            full = name if name in self.part_joints else self.scene.cabinet_prefix + name
+            d.qvel[m.jnt_dofadr[m.joint(full).id]] = 0.0
+        mujoco.mj_forward(m, d)
 
     def snapshot(self) -> WorldState:
         """The whole simulation state (physics, controls, time) and the episode's cabinet
@@ -196,11 +210,40 @@ class ManipulationWorld:
         self._cabinet_start = state.cabinet_start.copy()
         mujoco.mj_forward(m, d)
 
-    def _fill_gripper_ctrl(self) -> None:
+    def hold_position(self) -> None:
+        """Set every servo's target to where its joint is now (velocity targets 0), so
+        the robot holds still."""
         m, d = self.model, self.data
+        joint_trn = int(mujoco.mjtTrn.mjTRN_JOINT)
+        ball = int(mujoco.mjtJoint.mjJNT_BALL)
+        for a in range(m.nactuator):
+            if int(m.actuator_trntype[a]) != joint_trn or m.actuator_biastype[a] == 0:
+                continue  # not a servo on a joint (e.g. the finger tendon: set below)
+            jid, c = m.actuator_trnid[a, 0], m.actuator_ctrladr[a]
+            q = m.jnt_qposadr[jid]
+            n = 4 if int(m.jnt_type[jid]) == ball else 1
+            d.ctrl[c : c + m.actuator_ctrlnum[a]] = 0.0
+            d.ctrl[c : c + n] = d.qpos[q : q + n]
+
+    def ctrl_index(self, actuator: str) -> int:
+        """Index in ``data.ctrl`` of ``actuator``'s first control (MuJoCo 4 actuators may
+        take several: a PID servo a position and a velocity target, an orientation servo
+        a quaternion).
+
+        Raises:
+            UnknownNameError: no actuator of that name.
+        """
+        aid = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_ACTUATOR, actuator)
+        if aid < 0:
+            names = [self.model.actuator(i).name for i in range(self.model.nactuator)]
+            raise UnknownNameError("actuator", actuator, names)
+        return int(self.model.actuator_ctrladr[aid])
+
+    def _fill_gripper_ctrl(self) -> None:
+        m = self.model
         aid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, "gripper")
         if aid >= 0:
-            d.ctrl[aid] = m.actuator_ctrlrange[aid, 1]
+            self.data.ctrl[m.actuator_ctrladr[aid]] = GRIPPER_OPEN
 
     def _set_joint(self, name: str, q: float) -> None:
         m = self.model
@@ -218,11 +261,22 @@ class ManipulationWorld:
         Raises:
             UnknownNameError: a robot joint of ``source`` is missing here.
         """
+        names = list(source.robot_joints) + ([OBJECT_JOINT] if include_object else [])
+        self.copy_joints(source, names)
+
+    def copy_joints(self, source: ManipulationWorld, names: list[str]) -> None:
+        """Copy the positions and velocities of the joints ``names`` from ``source`` by
+        name (a joint ``source`` lacks is skipped), then update the kinematics; e.g. the
+        cabinet's free joint ``cabinet/free`` into a planning world, where the real
+        cabinet has been dragged to.
+
+        Raises:
+            UnknownNameError: a joint is missing here.
+        """
         if source is self:
             return
         dst_m, dst_d = self.model, self.data
         src_m, src_d = source.model, source.data
-        names = list(source.robot_joints) + ([OBJECT_JOINT] if include_object else [])
         all_names = [dst_m.joint(j).name for j in range(dst_m.njnt)]
         for name in names:
             jd = mujoco.mj_name2id(dst_m, mujoco.mjtObj.mjOBJ_JOINT, name)
@@ -256,6 +310,18 @@ class ManipulationWorld:
         """Every cabinet part joint's position [m or rad], by joint name."""
         m, d = self.model, self.data
         return {n: float(d.qpos[m.jnt_qposadr[m.joint(n).id]]) for n in self.part_joints}
+
+    def part_units(self) -> dict[str, str]:
+        """``"m"`` (prismatic) or ``"rad"`` (revolute) per cabinet part joint."""
+        m = self.model
+        slide = int(mujoco.mjtJoint.mjJNT_SLIDE)
+        return {
+            n: "m" if int(m.jnt_type[m.joint(n).id]) == slide else "rad" for n in self.part_joints
+        }
+
+    def cabinet_displacement_vector(self) -> np.ndarray:
+        """Horizontal displacement (x, y) of the cabinet base since reset [m], (2,)."""
+        return self.data.xpos[self._cabinet_body][:2] - self._cabinet_start[:2]
 
     def cabinet_displacement(self) -> float:
         """Horizontal distance the cabinet base moved since reset [m]."""

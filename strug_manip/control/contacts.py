@@ -1,0 +1,212 @@
+"""Robot contacts at kinematic configurations: the one collision check of the controllers.
+
+:class:`ContactChecker` sets joint values into a scratch ``MjData`` of a world's model
+(``mj_kinematics`` + ``mj_collision``, no physics) and reports the contacts of robot
+bodies that are not allowed. The OMPL validity check (:mod:`.motion`), the checks of
+the Cartesian lines of every skill and the base placement search (:mod:`.placement`)
+all use it.
+
+- *Robot bodies* are the subtree of the robot's root body; a contact counts if one of
+  its two bodies is a robot body and the pair is not allowed.
+- *Allowed pairs* are body ids, e.g. the fingers with the handle they are about to grasp
+  (:meth:`ContactChecker.allow`).
+- An *attached* body (a held object) follows the gripper: before each check its free
+  joint is set so that ``T_world_body = T_world_gripper @ T_gripper_body``; its contacts
+  with the gripper are allowed, its contacts with anything else count as the robot's.
+- Other coordinates (the base, the cabinet parts, the object when not held) stay as the
+  caller sets them (:meth:`ContactChecker.load`, :meth:`ContactChecker.set`).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Iterable, Sequence
+
+import mujoco
+import numpy as np
+
+from planners.errors import ConfigError, UnknownNameError
+from strug_manip.robot.fetch import GRIPPER_SITE
+
+#: Largest joint step between two checks along a joint-space segment [rad or m].
+CHECK_STEP = 0.04
+#: Bodies of the Fetch's hand: they may touch what they grasp.
+HAND_BODIES: tuple[str, ...] = ("gripper_link", "r_gripper_finger_link", "l_gripper_finger_link")
+
+
+class ContactChecker:
+    """Forbidden robot contacts of a model at kinematic configurations.
+
+    Args:
+        model: a MuJoCo model holding the robot (and the scene).
+        joints: the joints whose values the checks set, in the order of the vectors
+            given to :meth:`contacts` (e.g. torso + arm, or base + torso + arm).
+        robot_root: the robot's root body (default: the root of ``joints[0]``'s body).
+
+    Raises:
+        UnknownNameError: a joint or body name is not in the model.
+        ConfigError: ``joints`` is empty or a joint is not a hinge or slide.
+    """
+
+    def __init__(
+        self, model: mujoco.MjModel, joints: Sequence[str], robot_root: str | None = None
+    ) -> None:
+        m = self.model = model
+        names = [m.joint(j).name for j in range(m.njnt)]
+        if isinstance(joints, str) or not joints:
+            raise ConfigError(f"joints must be a non-empty sequence of names, got {joints!r}")
+        ids = []
+        for j in joints:
+            jid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, j)
+            if jid < 0:
+                raise UnknownNameError("joint", j, names)
+            if int(m.jnt_type[jid]) not in (
+                int(mujoco.mjtJoint.mjJNT_HINGE),
+                int(mujoco.mjtJoint.mjJNT_SLIDE),
+            ):
+                raise ConfigError(f"joint {j!r} must be a hinge or slide joint")
+            ids.append(jid)
+        self.joints = tuple(joints)
+        self.qadr = np.array([m.jnt_qposadr[j] for j in ids])
+        root = (
+            int(m.body_rootid[m.jnt_bodyid[ids[0]]])
+            if robot_root is None
+            else self.body_id(robot_root)
+        )
+        self.robot = np.array([b != 0 and int(m.body_rootid[b]) == root for b in range(m.nbody)])
+        self.geom_body = np.asarray(m.geom_bodyid).copy()
+        self.hand = np.array([self.body_id(b) for b in HAND_BODIES])
+        self.data = mujoco.MjData(m)
+        self._site = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, GRIPPER_SITE)
+        self._allowed = np.zeros((m.nbody, m.nbody), dtype=bool)
+        self._attached: tuple[int, int, np.ndarray] | None = None  # body, qpos adr, T_g_b
+
+    def body_id(self, name: str) -> int:
+        """Id of the body ``name``; raises :class:`UnknownNameError`."""
+        bid = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, name)
+        if bid < 0:
+            names = [self.model.body(i).name for i in range(self.model.nbody)]
+            raise UnknownNameError("body", name, names)
+        return int(bid)
+
+    # -- state -------------------------------------------------------------------------
+    def load(self, data: mujoco.MjData) -> ContactChecker:
+        """Copy ``data``'s positions (and mocap poses) into the scratch data."""
+        self.data.qpos[:] = data.qpos
+        if self.model.nmocap:
+            self.data.mocap_pos[:] = data.mocap_pos
+            self.data.mocap_quat[:] = data.mocap_quat
+        return self
+
+    def set(self, values: dict[str, float]) -> ContactChecker:
+        """Set joints of the scratch data by name (e.g. the base, or a part's joint)."""
+        m = self.model
+        for name, v in values.items():
+            jid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, name)
+            if jid < 0:
+                raise UnknownNameError("joint", name, [m.joint(j).name for j in range(m.njnt)])
+            self.data.qpos[m.jnt_qposadr[jid]] = v
+        return self
+
+    def get(self, joint: str) -> float:
+        """A hinge or slide joint's position in the scratch data [m or rad]."""
+        jid = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_JOINT, joint)
+        if jid < 0:
+            names = [self.model.joint(j).name for j in range(self.model.njnt)]
+            raise UnknownNameError("joint", joint, names)
+        return float(self.data.qpos[self.model.jnt_qposadr[jid]])
+
+    def allow(self, pairs: Iterable[tuple[int, int]] = ()) -> ContactChecker:
+        """Replace the allowed body pairs (ids, either order)."""
+        self._allowed[:] = False
+        for a, b in pairs:
+            self._allowed[a, b] = self._allowed[b, a] = True
+        if self._attached is not None:
+            for h in self.hand:
+                self._allowed[self._attached[0], h] = self._allowed[h, self._attached[0]] = True
+        return self
+
+    def hand_with(self, bodies: Iterable[int]) -> list[tuple[int, int]]:
+        """Pairs (hand body, body) for every hand body and each of ``bodies``."""
+        return [(int(h), int(b)) for h in self.hand for b in bodies]
+
+    def attach(self, body: str | None, T_gripper_body: np.ndarray | None = None) -> None:
+        """Make ``body`` (a free body, e.g. the held object) follow the gripper at
+        ``T_gripper_body`` (4, 4); ``None`` detaches."""
+        if body is None:
+            self._attached = None
+            return
+        m = self.model
+        bid = self.body_id(body)
+        jnt = int(m.body_jntadr[bid])
+        if jnt < 0 or int(m.jnt_type[jnt]) != int(mujoco.mjtJoint.mjJNT_FREE):
+            raise ConfigError(f"only a body on a free joint can be attached, got {body!r}")
+        self._attached = (bid, int(m.jnt_qposadr[jnt]), np.asarray(T_gripper_body, float))
+        for h in self.hand:
+            self._allowed[bid, h] = self._allowed[h, bid] = True
+
+    @property
+    def attached_body(self) -> int:
+        """Id of the attached body (-1 if none)."""
+        return -1 if self._attached is None else self._attached[0]
+
+    # -- checks ------------------------------------------------------------------------
+    def _place_attached(self) -> None:
+        m, d = self.model, self.data
+        _, adr, T_gb = self._attached  # type: ignore[misc]
+        T = np.eye(4)
+        T[:3, :3] = d.site_xmat[self._site].reshape(3, 3)
+        T[:3, 3] = d.site_xpos[self._site]
+        T = T @ T_gb
+        d.qpos[adr : adr + 3] = T[:3, 3]
+        quat = np.empty(4)
+        mujoco.mju_mat2Quat(quat, np.ascontiguousarray(T[:3, :3]).reshape(9))
+        d.qpos[adr + 3 : adr + 7] = quat
+        mujoco.mj_kinematics(m, d)
+
+    def pairs(self, q: np.ndarray) -> np.ndarray:
+        """Forbidden contacts at ``q`` (values of :attr:`joints`): (k, 2) body ids."""
+        m, d = self.model, self.data
+        d.qpos[self.qadr] = q
+        mujoco.mj_kinematics(m, d)
+        if self._attached is not None:
+            self._place_attached()
+        mujoco.mj_collision(m, d)
+        if d.ncon == 0:
+            return np.zeros((0, 2), dtype=int)
+        bodies = self.geom_body[d.contact.geom]
+        robot = self.robot[bodies].any(axis=1)
+        if self._attached is not None:
+            robot |= (bodies == self._attached[0]).any(axis=1)
+        bad = robot & ~self._allowed[bodies[:, 0], bodies[:, 1]]
+        return bodies[bad]
+
+    def contacts(self, q: np.ndarray) -> list[str]:
+        """Forbidden contacts at ``q`` as sorted ``body1/body2`` names ([] if none)."""
+        m = self.model
+        return sorted({f"{m.body(a).name}/{m.body(b).name}" for a, b in self.pairs(q).tolist()})
+
+    def free(self, q: np.ndarray) -> bool:
+        """No forbidden contact at ``q``."""
+        return len(self.pairs(q)) == 0
+
+    def segment(self, qa: np.ndarray, qb: np.ndarray) -> list[str]:
+        """Forbidden contacts anywhere on the straight joint-space segment ``qa -> qb``
+        (checked every :data:`CHECK_STEP`); [] if free."""
+        n = max(1, math.ceil(float(np.max(np.abs(qb - qa))) / CHECK_STEP))
+        for k in range(n + 1):
+            q = qa + (k / n) * (qb - qa)
+            if not self.free(q):
+                return self.contacts(q)
+        return []
+
+    def path(self, qs: Sequence[np.ndarray]) -> list[str]:
+        """Forbidden contacts anywhere along the joint-space polyline ``qs``."""
+        if len(qs) == 1:
+            return [] if self.free(qs[0]) else self.contacts(qs[0])
+        for qa, qb in itertools.pairwise(qs):
+            hits = self.segment(qa, qb)
+            if hits:
+                return hits
+        return []

@@ -1,0 +1,383 @@
+"""The full robot: a :class:`~strug_manip.control.plan.SkillPlan` executed by the Fetch.
+
+:meth:`FullRobot.run` plans everything before anything moves, then executes it with
+MuJoCo physics stepping all along (:class:`~strug_manip.control.driver.JointDriver`):
+
+1. **plan**: the base placement (:func:`~strug_manip.control.placement.find_placement`:
+   IK of the pre-grasp and of every Cartesian line, collision checked in the planning
+   world, with the believed part moving along), then the free motions to the first
+   placement for which they plan (stow, route, reach);
+2. **drive** (if the base must move): the arm goes to its tuck first (no driving with
+   the arm out; carrying the object, to its carry posture), the base follows a
+   collision-checked route (straight, else around the obstacles on a floor grid), the
+   torso rising on the way;
+3. **reach**: an OMPL motion to the pre-grasp (the straight joint-space line where it
+   is free; carrying an object, it moves with the gripper in the checks);
+4. **phases**: each line followed (its IK path, the base along where it is a whole-body
+   line), each grip closed or opened; while a line runs, a lost grasp (fingers closed
+   on nothing) or the gripper more than ``tracking_tolerance`` behind its commanded
+   pose (the arm is blocked) stops the run;
+5. **stow**: back to the tuck (OMPL; holding the object: to its carry posture), so
+   the next skill may drive and the head camera sees the cabinet past the arm.
+
+Collision checks and plans use ``plan_world`` (the believed cabinet; default the world
+itself), into which the robot's and the object's state is copied by joint name before
+each check; execution and the facts of the outcome come from ``world``. The same world
+state, plan and seed give the same outcome, bit for bit.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from planners.errors import ConfigError
+from strug_manip.control.context import ControlContext
+from strug_manip.control.driver import JointDriver
+from strug_manip.control.grasps import held_grasp
+from strug_manip.control.motion import NO_PLAN, ArmValidity
+from strug_manip.control.navigation import plan_route
+from strug_manip.control.outcome import Outcome, SkillStop, Status
+from strug_manip.control.params import DEFAULT_PARAMS, SkillParams
+from strug_manip.control.placement import Placement, find_placement
+from strug_manip.control.plan import Grip, Line, SkillPlan
+from strug_manip.robot.fetch import (
+    ARM_TORSO_JOINTS,
+    BASE_JOINTS,
+    CARRY,
+    FINGERS_EMPTY,
+    GRIPPER_SITE,
+    GRIPPER_SQUEEZE,
+    TUCK,
+)
+from strug_manip.world.sim import ManipulationWorld
+
+#: A callback told the name of each key instant of a run (e.g. to render a frame).
+Observer = Callable[[str], None]
+#: Joint distance from the tuck below which the arm counts as tucked [rad or m].
+TUCKED_TOLERANCE = 0.15
+
+
+@dataclass(frozen=True, eq=False)
+class FreeMotion:
+    """The free motions before a skill's first line, planned before anything moves.
+
+    Attributes:
+        stow: torso + arm waypoints to the drive posture (N, 8), or None.
+        route: base poses to drive through, or None (the base stays).
+        torso: the torso height to rise to while driving [m], or None.
+        reach: torso + arm waypoints to the pre-grasp (N, 8).
+    """
+
+    stow: np.ndarray | None
+    route: list[np.ndarray] | None
+    torso: float | None
+    reach: np.ndarray
+
+
+def wrap_to(yaw: float, near: float) -> float:
+    """``yaw`` [rad] plus the multiple of 2 pi that brings it closest to ``near``."""
+    return near + (yaw - near + np.pi) % (2 * np.pi) - np.pi
+
+
+class FullRobot:
+    """Runs skill plans on the Fetch of ``world``.
+
+    Args:
+        world: where physics runs and the outcome is measured.
+        ctx: shared solvers and caches (default: a new :class:`ControlContext`).
+        params: skill constants (default :data:`DEFAULT_PARAMS`).
+        plan_world: the world plans and collision checks use (the believed cabinet);
+            default ``world``.
+        seed: seed of the OMPL plans (an int >= 0).
+        observer: told the name of each key instant.
+    """
+
+    def __init__(
+        self,
+        world: ManipulationWorld,
+        ctx: ControlContext | None = None,
+        params: SkillParams = DEFAULT_PARAMS,
+        plan_world: ManipulationWorld | None = None,
+        seed: int = 0,
+        observer: Observer | None = None,
+    ) -> None:
+        if not isinstance(world, ManipulationWorld):
+            raise ConfigError(f"world must be a ManipulationWorld, got {world!r}")
+        if plan_world is not None and not isinstance(plan_world, ManipulationWorld):
+            raise ConfigError(f"plan_world must be a ManipulationWorld or None, got {plan_world!r}")
+        if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+            raise ConfigError(f"seed must be a non-negative int, got {seed!r}")
+        self.world, self.params, self.seed, self.observer = world, params, int(seed), observer
+        self.plan_world = world if plan_world is None else plan_world
+        self.ctx = ctx or ControlContext()
+
+    # -- the run -------------------------------------------------------------------------
+    def run(self, plan: SkillPlan) -> Outcome:
+        """Execute ``plan`` (see the module docstring); never raises for a failure of the
+        skill: the :class:`Outcome` says how it ended."""
+        t_wall = time.perf_counter()
+        self.drv = JointDriver(self.world, self.params.time_budget, self.params.record_period)
+        self.ik_seconds = self.plan_seconds = 0.0
+        self.n_plans = 0
+        parts0 = self.world.part_positions()
+        cab0 = self.world.cabinet_displacement_vector()
+        phase = "plan"
+        try:
+            placement, free = self._plan_free(plan)
+            plan = placement.plan  # the fingers may be swapped
+            phase = "reach"
+            self._key("start")
+            self._free_motion(free)
+            self._key("pre-grasp")
+            k = 0  # index of the next line
+            for p in plan.phases:
+                phase = p.name
+                if isinstance(p, Grip):
+                    self.drv.grip(p.closed, self.params.grip_time, GRIPPER_SQUEEZE)
+                else:
+                    self._line(p, placement, k)
+                    k += 1
+                self._key(p.name)
+            phase = "stow"
+            self._stow(holding=self._holding())
+            self._key("end")
+        except SkillStop as stop:
+            return self._outcome(
+                plan, stop.status, stop.detail, stop.phase or phase, parts0, cab0, t_wall
+            )
+        return self._outcome(plan, Status.OK, "", "", parts0, cab0, t_wall)
+
+    # -- planning ------------------------------------------------------------------------
+    def _sync(self) -> ManipulationWorld:
+        """The planning world with the robot's and the object's state of ``world``."""
+        if self.plan_world is not self.world:
+            self.plan_world.copy_robot_state(self.world)
+        return self.plan_world
+
+    def _checker(self, carrying: tuple[str, np.ndarray] | None):
+        pw = self._sync()
+        checker = self.ctx.checker(pw.model).load(pw.data)
+        if carrying is None:
+            checker.attach(None)
+        else:
+            checker.attach(*carrying)
+        return checker.allow()
+
+    def _placements(self, plan: SkillPlan) -> list[Placement]:
+        """Where the base may stand for ``plan``, best first."""
+        t = time.perf_counter()
+        try:
+            speeds = (self.drv.vmax, self.drv.base_speed)
+            postures = (np.array(TUCK), self._reach_start(plan))
+            found = find_placement(
+                plan, self.ctx.ik, self.ctx.wb_ik, self.drv.base, postures, speeds,
+                self._checker(plan.carrying),
+            )  # fmt: skip
+            return [found, *found.alternatives]
+        finally:
+            self.ik_seconds += time.perf_counter() - t
+
+    def _reach_start(self, plan: SkillPlan) -> np.ndarray:
+        """Torso + arm where the reach to a pre-grasp will start: where the arm is if it
+        may drive like that (tucked or carrying), else the posture it will drive in."""
+        if self._tucked():
+            return self.drv.q
+        return self._drive_posture(plan.carrying)
+
+    def _plan_arm(
+        self,
+        q_from: np.ndarray,
+        q_to: np.ndarray,
+        carrying: tuple[str, np.ndarray] | None,
+        base: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """OMPL waypoints (N, 8) from ``q_from`` to ``q_to`` (excluded the start) with
+        the base at ``base`` (default: where it is)."""
+        t = time.perf_counter()
+        checker = self._checker(carrying)
+        validity = ArmValidity(checker, self.drv.base if base is None else base)
+        for planner in self.ctx.planners(self.plan_world.model):
+            plan = planner.plan(
+                dict(zip(ARM_TORSO_JOINTS, q_from.tolist(), strict=True)),
+                dict(zip(ARM_TORSO_JOINTS, q_to.tolist(), strict=True)),
+                validity,
+                timeout=self.params.plan_timeout,
+                seed=self.seed + self.n_plans,
+            )
+            self.n_plans += 1
+            if plan.success or plan.reason != NO_PLAN:
+                break
+        self.plan_seconds += time.perf_counter() - t
+        if not plan.success:
+            raise SkillStop(Status.NO_MOTION_PLAN, f"{plan.reason}: {plan.detail}")
+        return plan.waypoints[1:]
+
+    def _route(self, target: np.ndarray, arm: np.ndarray, carrying) -> list[np.ndarray]:
+        """Base poses to drive through to ``target`` with the arm at ``arm`` (its drive
+        posture) and what it carries (:func:`~strug_manip.control.navigation.plan_route`)."""
+        t = time.perf_counter()
+        try:
+            route = plan_route(self._checker(carrying), self.drv.base, target, arm)
+        finally:
+            self.plan_seconds += time.perf_counter() - t
+        if route is None:
+            raise SkillStop(Status.NO_MOTION_PLAN, "no collision-free route for the base", "reach")
+        return route
+
+    # -- motions -------------------------------------------------------------------------
+    def _near(self, posture: Sequence[float]) -> bool:
+        """The arm (torso aside) is within :data:`TUCKED_TOLERANCE` of ``posture``."""
+        return bool(np.max(np.abs(self.drv.q[1:] - np.array(posture)[1:])) < TUCKED_TOLERANCE)
+
+    def _tucked(self) -> bool:
+        """The arm is in (or near) its tuck or a carry posture: it may drive."""
+        return any(self._near(p) for p in (TUCK, *CARRY.values()))
+
+    def _holding(self) -> bool:
+        fingers = float(self.world.data.ten_length[self.world.model.tendon("gripper").id])
+        return self.drv.grip_cmd == GRIPPER_SQUEEZE and fingers > FINGERS_EMPTY
+
+    def _plan_free(self, plan: SkillPlan) -> tuple[Placement, FreeMotion]:
+        """The first placement (best first) whose free motions plan: the stow (if the
+        base must move and the arm is not in its drive posture), the base's route, the
+        reach to the pre-grasp. Everything is planned before anything moves."""
+        last: SkillStop | None = None
+        for placement in self._placements(plan):
+            try:
+                return placement, self._free_plan(placement)
+            except SkillStop as stop:
+                last = stop
+        assert last is not None
+        raise last
+
+    def _free_plan(self, placement: Placement) -> FreeMotion:
+        carrying = placement.plan.carrying
+        q_pre = placement.q_pre
+        far = np.max(np.abs(placement.base[:2] - self.drv.base[:2])) > self.params.drive_tolerance
+        turn = abs(wrap_to(placement.base[2], self.drv.base[2]) - self.drv.base[2]) > 0.02
+        if not (far or turn):
+            return FreeMotion(None, None, None, self._plan_arm(self.drv.q, q_pre, carrying))
+        drive_q = self._drive_posture(carrying)
+        stow = None if self._near(drive_q) else self._plan_arm(self.drv.q, drive_q, carrying)
+        start = drive_q if stow is not None else self.drv.q
+        route = self._route(placement.base, start, carrying)
+        torso = None
+        if carrying is None:  # the torso moves on the way (it is the slowest joint)
+            torso = float(q_pre[0])
+            start = start.copy()
+            start[0] = torso
+        reach = self._plan_arm(start, q_pre, carrying, base=placement.base)
+        return FreeMotion(stow, route, torso, reach)
+
+    def _free_motion(self, free: FreeMotion) -> None:
+        """Execute a planned free motion (stow, drive, reach)."""
+        if free.stow is not None:
+            self.drv.follow(list(free.stow), 0.3, monitor=self._line_monitor(None))
+            self.drv.hold(self.params.settle_time)
+        if free.route is not None:
+            self.drv.drive(free.route, torso=free.torso)
+        self.drv.follow(list(free.reach), 0.3, monitor=self._line_monitor(None))
+        self.drv.hold(self.params.settle_time)
+
+    def _drive_posture(self, carrying: tuple[str, np.ndarray] | None) -> np.ndarray:
+        """Torso + arm the robot drives in: tucked, or carrying the object in its grasp's
+        carry posture."""
+        return np.array(TUCK if carrying is None else CARRY[held_grasp(carrying[1])])
+
+    def _stow(self, holding: bool) -> None:
+        """Back to the tuck (OMPL); holding the object, to the carry posture of its grasp,
+        so the robot may drive and its head camera sees past the arm."""
+        carrying = self._carried() if holding else None
+        goal = self._drive_posture(carrying)
+        if self._near(goal):
+            return
+        self.drv.follow(list(self._plan_arm(self.drv.q, goal, carrying)), 0.3)
+        self.drv.hold(self.params.settle_time)
+
+    def _carried(self) -> tuple[str, np.ndarray]:
+        """The held object and ``T_gripper_object`` now."""
+        T_wg = self.world.site_pose(GRIPPER_SITE)
+        return "object", np.linalg.inv(T_wg) @ self.world.object_pose()
+
+    def _line(self, line: Line, placement: Placement, k: int) -> None:
+        """Follow line ``k`` of the placement, monitoring the grasp and the tracking."""
+        seconds = max(0.3, line.length / line.speed)
+        base_path = placement.base_paths[k]
+        mon = self._line_monitor(line)
+        self.drv.follow(list(placement.lines[k]), seconds, base_path=base_path, monitor=mon)
+        self.drv.hold(self.params.settle_time)
+        mon(0.0)
+
+    def _line_monitor(self, line: Line | None) -> Callable[[float], None]:
+        """Stops a motion when the grasp of ``line`` is lost (if it holds something) or
+        the gripper lags more than the tracking tolerance behind its command (None: a
+        free motion)."""
+        m, d = self.world.model, self.world.data
+        tendon = m.tendon("gripper").id
+        site = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, GRIPPER_SITE)
+        tol = self.params.free_tolerance if line is None else self.params.tracking_tolerance
+        name = "free motion" if line is None else line.name
+
+        def monitor(_: float) -> None:
+            if line is not None and line.holding and float(d.ten_length[tendon]) < FINGERS_EMPTY:
+                raise SkillStop(Status.GRASP_LOST, f"the fingers closed on nothing ({name})")
+            cmd = self.ctx.ik.forward(self._command())
+            lag = float(np.linalg.norm(cmd[:3, 3] - d.site_xpos[site]))
+            if lag > tol:
+                raise SkillStop(
+                    Status.COLLISION, f"the gripper is held back {lag:.3f} m from its path ({name})"
+                )
+
+        return monitor
+
+    def _command(self) -> dict[str, float]:
+        return {
+            **dict(zip(BASE_JOINTS, self.drv.base_target.tolist(), strict=True)),
+            **dict(zip(ARM_TORSO_JOINTS, self.drv.arm_cmd.tolist(), strict=True)),
+        }
+
+    def _key(self, name: str) -> None:
+        if self.observer is not None:
+            mujoco.mj_forward(self.world.model, self.world.data)
+            self.observer(name)
+
+    # -- the report ----------------------------------------------------------------------
+    def _outcome(
+        self,
+        plan: SkillPlan,
+        status: Status,
+        detail: str,
+        phase: str,
+        parts0: dict[str, float],
+        cab0: np.ndarray,
+        t_wall: float,
+    ) -> Outcome:
+        w = self.world
+        mujoco.mj_forward(w.model, w.data)
+        parts = w.part_positions()
+        times, qpos = self.drv.recording()
+        return Outcome(
+            skill=plan.skill,
+            status=status,
+            detail=detail,
+            phase=phase,
+            part_motion={j: parts[j] - parts0[j] for j in parts},
+            part_units=w.part_units(),
+            part_positions=parts,
+            cabinet_displacement=w.cabinet_displacement(),
+            cabinet_motion=float(np.linalg.norm(w.cabinet_displacement_vector() - cab0)),
+            object_pose=w.object_pose(),
+            holding=self._holding(),
+            times=times,
+            qpos=qpos,
+            sim_time=self.drv.elapsed,
+            wall_seconds=time.perf_counter() - t_wall,
+            ik_seconds=self.ik_seconds,
+            planning_seconds=self.plan_seconds,
+            physics_seconds=self.drv.physics_seconds,
+        )

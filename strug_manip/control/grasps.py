@@ -1,0 +1,108 @@
+"""Grasp poses of cabinet handles, for the opening and probing skills.
+
+A handle grasp puts the TCP on the handle's grasp point with the gripper's approach
+(its x axis) into the part's front and its fingers straddling the handle: the finger
+opening (gripper y) perpendicular to a bar. A knob can be taken either way: on a door
+the fingers open parallel to the free edge the knob sits near (vertically on a side
+door, horizontally on a flap), so the outer finger stays clear of the carcass beside
+that edge; on a drawer they open horizontally; the other way is the next candidate. Of
+the two finger directions the one pointing up (or, if level, to +y) is used; the
+skills' base placement also tries the fingers swapped (the same grasp, the wrist
+turned half a turn).
+
+:func:`handle_grasps` lists candidates for one part, best first: level, then pitched
+down by :data:`PITCHES` (the approach tilted downward: the wrist above the handle, so
+the forearm clears low fronts and table edges), then pitched up. Each is a full
+``T_world_gripper``; a caller (the manipulation domain's grasp sampler, an evaluation)
+tries them in order.
+
+Frames: ``T_world_object`` is the cabinet's frame (its +x the front's outward normal).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from strug_manip.objects.generator import PartSpec, axis_angle
+
+#: Pitch angles of the candidate grasps after the level one [rad] (positive: the
+#: approach tilted down).
+PITCHES: tuple[float, ...] = (0.35, 0.7, -0.35)
+
+
+def grasp_rotation(approach: np.ndarray, bar_axis: np.ndarray | None) -> np.ndarray:
+    """Gripper orientation ``R_world_gripper`` (3, 3): x along ``approach``, y (the
+    finger opening) perpendicular to ``bar_axis`` (a knob, or a bar along the approach:
+    y horizontal), of the two the one with y pointing up (or, if level, to +y)."""
+    a = np.asarray(approach, dtype=float)
+    a = a / np.linalg.norm(a)
+    y = None
+    if bar_axis is not None:
+        y = np.cross(a, np.asarray(bar_axis, dtype=float))
+        if np.linalg.norm(y) < 1e-6:
+            y = None
+    if y is None:
+        y = np.cross(np.array([0.0, 0.0, 1.0]), a)
+        if np.linalg.norm(y) < 1e-6:
+            y = np.array([0.0, 1.0, 0.0])
+    y = y - (y @ a) * a
+    y /= np.linalg.norm(y)
+    if y[2] < -1e-9 or (abs(y[2]) <= 1e-9 and y[1] < 0):
+        y = -y
+    return np.column_stack([a, y, np.cross(a, y)])
+
+
+def flip_fingers(T: np.ndarray) -> np.ndarray:
+    """The same grasp with the fingers swapped: ``T`` (4, 4) turned half a turn about
+    its approach axis."""
+    out = np.array(T, dtype=float, copy=True)
+    out[:3, 1] = -out[:3, 1]
+    out[:3, 2] = -out[:3, 2]
+    return out
+
+
+def handle_grasps(
+    part: PartSpec, q: float = 0.0, T_world_object: np.ndarray | None = None
+) -> list[np.ndarray]:
+    """Candidate ``T_world_gripper`` (4, 4) grasping ``part``'s handle at joint position
+    ``q`` [m or rad], best first (level, then :data:`PITCHES`); [] for a part without a
+    handle (a flat front cannot be grasped by a parallel gripper).
+
+    The approach is against the front's outward normal as the part is at ``q`` (a door
+    opened by q: its panel's normal), pitched about the horizontal axis of the front.
+    """
+    if part.handle_pos is None or part.handle == "none":
+        return []
+    T = np.eye(4) if T_world_object is None else np.asarray(T_world_object, dtype=float)
+    R_part = np.eye(3) if part.joint_type != "revolute" else axis_angle(part.axis, q)
+    normal = T[:3, :3] @ R_part @ np.array([1.0, 0.0, 0.0])
+    bar = T[:3, :3] @ R_part @ part.handle_axis if part.handle == "bar" else None
+    point = part.handle_at(q, T)
+    side = np.cross([0.0, 0.0, 1.0], normal)  # horizontal, along the front
+    if np.linalg.norm(side) < 1e-6:
+        side = T[:3, :3] @ np.array([0.0, 1.0, 0.0])
+    side /= np.linalg.norm(side)
+    bars: list[np.ndarray | None] = [bar]
+    if part.handle == "knob":
+        # As if straddling a bar along the line from the hinge to the free edge (a
+        # door), or vertical (a drawer: the fingers open horizontally); then the other.
+        if part.joint_type == "revolute":
+            edge = T[:3, :3] @ R_part @ np.cross(part.axis, [1.0, 0.0, 0.0])
+            bars = [edge, np.cross(normal, edge)]
+        else:
+            bars = [None, side]
+    out = []
+    for b in bars:
+        for pitch in (0.0, *PITCHES):
+            approach = axis_angle(side, -pitch) @ -normal  # +pitch: tilted down
+            g = np.eye(4)
+            g[:3, :3] = grasp_rotation(approach, b)
+            g[:3, 3] = point
+            out.append(g)
+    return out
+
+
+def held_grasp(T_gripper_object: np.ndarray) -> str:
+    """``top`` if the object hangs along the gripper's approach (its up axis against
+    the approach: taken from above), else ``side``."""
+    return "top" if float(np.asarray(T_gripper_object)[0, 2]) < -0.7 else "side"

@@ -1,0 +1,206 @@
+"""Where the base drives: a collision-free route on the floor between two base poses.
+
+:func:`plan_route` first tries the straight segment; if the robot (in its drive
+posture, holding what it carries) would touch anything on the way, it searches a grid
+of the floor with A*: every collision geom that is not the robot's nor the floor, and
+that reaches into the robot's height, blocks the cells its footprint (its horizontal
+bounding box) covers, grown by the robot's own horizontal radius at that geom's
+heights (in that posture, from the vertices of its meshes and the corners of its
+boxes: so the base may stand under a table top or an open flap that only the narrower
+upper body must keep clear of). The
+grid path is shortened by line of sight, the heading turns evenly along it, and the
+route is kept only if the full kinematic check (the real robot geometry at every
+:data:`STEP` of it) finds it free.
+
+Units: [m], [rad]; a base pose is (x, y, yaw).
+"""
+
+from __future__ import annotations
+
+import heapq
+import itertools
+import math
+
+import mujoco
+import numpy as np
+
+from strug_manip.control.contacts import ContactChecker
+
+#: Grid cell size [m].
+CELL = 0.05
+#: Half size of the searched square of floor, around the start and the goal [m].
+MARGIN = 1.5
+#: Spacing of the full collision checks along a route [m].
+STEP = 0.05
+#: Safety margin added to the robot's radius on the grid [m].
+CLEARANCE = 0.03
+#: Height above which geometry cannot touch the robot [m].
+ROBOT_HEIGHT = 1.6
+
+
+def route_free(checker: ContactChecker, route: list[np.ndarray], arm: np.ndarray) -> bool:
+    """The robot (base + ``arm``, torso + arm (8,)) touches nothing along the polyline of
+    base poses ``route`` (checked every :data:`STEP` of travel, yaw interpolated)."""
+    for a, b in itertools.pairwise(route):
+        n = max(1, math.ceil(float(np.linalg.norm(b[:2] - a[:2])) / STEP))
+        n = max(n, math.ceil(abs(float(b[2] - a[2])) / 0.1))  # turns: every 0.1 rad
+        for k in range(n + 1):
+            if not checker.free(np.concatenate([a + (k / n) * (b - a), arm])):
+                return False
+    return True
+
+
+def plan_route(
+    checker: ContactChecker, start: np.ndarray, goal: np.ndarray, arm: np.ndarray
+) -> list[np.ndarray] | None:
+    """Base poses to drive through from ``start`` to ``goal`` (both (3,), the goal's yaw
+    unwrapped to the nearest turn of the start's), the arm at ``arm``; None if none
+    is found. ``checker`` is loaded with the scene's state (and any carried object)."""
+    start = np.asarray(start, dtype=float)
+    goal = np.asarray(goal, dtype=float).copy()
+    goal[2] = start[2] + (goal[2] - start[2] + math.pi) % (2 * math.pi) - math.pi
+    checker.allow()
+    if route_free(checker, [start, goal], arm):
+        return [goal]
+    robot = _robot_points(checker, start, arm)
+    lo = np.minimum(start[:2], goal[:2]) - MARGIN
+    shape = np.ceil((np.maximum(start[:2], goal[:2]) + MARGIN - lo) / CELL).astype(int) + 1
+    blocked = _occupancy(checker, lo, shape, robot)
+    cell = lambda p: tuple(np.clip(np.round((p - lo) / CELL).astype(int), 0, shape - 1))  # noqa: E731
+    a, b = cell(start[:2]), cell(goal[:2])
+    blocked[a] = blocked[b] = False  # the robot stands there already / will
+    path = _astar(blocked, a, b)
+    if path is None:
+        return None
+    pts = [lo + CELL * np.array(c, dtype=float) for c in _shortcut(blocked, path)]
+    pts[0], pts[-1] = start[:2], goal[:2]
+    lengths = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))])
+    s = lengths / max(lengths[-1], 1e-9)
+    route = [
+        np.array([*p, start[2] + f * (goal[2] - start[2])]) for p, f in zip(pts, s, strict=True)
+    ]
+    if not route_free(checker, [start, *route[1:]], arm):
+        return None
+    return route[1:]
+
+
+def _robot_points(checker: ContactChecker, base: np.ndarray, arm: np.ndarray) -> np.ndarray:
+    """The robot's geometry (and any carried object's) in posture ``arm``, as points
+    (N, 3): horizontal distance from the base centre, height above the floor [m]."""
+    m, d = checker.model, checker.data
+    checker.free(np.concatenate([base, arm]))  # sets the kinematics
+    attached = checker.attached_body
+    out = []
+    for g in range(m.ngeom):
+        b = int(m.geom_bodyid[g])
+        collides = m.geom_contype[g] or m.geom_conaffinity[g]
+        if (checker.robot[b] or b == attached) and collides:
+            p = _points(m, d, g)
+            out.append(np.column_stack([np.linalg.norm(p[:, :2] - base[:2], axis=1), p[:, 2]]))
+    return np.vstack(out)
+
+
+def _points(m: mujoco.MjModel, d: mujoco.MjData, g: int) -> np.ndarray:
+    """Points bounding geom ``g``, world frame: a mesh's vertices (a round base's
+    bounding box corners would stick out by sqrt 2), else its bounding box corners."""
+    if int(m.geom_type[g]) == int(mujoco.mjtGeom.mjGEOM_MESH):
+        mesh = m.geom_dataid[g]
+        adr, n = m.mesh_vertadr[mesh], m.mesh_vertnum[mesh]
+        R = d.geom_xmat[g].reshape(3, 3)
+        return m.mesh_vert[adr : adr + n] @ R.T + d.geom_xpos[g]
+    return _corners(m, d, g)
+
+
+def _corners(m: mujoco.MjModel, d: mujoco.MjData, g: int) -> np.ndarray:
+    """The 8 corners (8, 3) of geom ``g``'s bounding box, world frame."""
+    center, half = m.geom_aabb[g, :3], m.geom_aabb[g, 3:]
+    signs = np.array(list(itertools.product((-1, 1), repeat=3)), dtype=float)
+    local = center + signs * half
+    R = d.geom_xmat[g].reshape(3, 3)
+    return local @ R.T + d.geom_xpos[g]
+
+
+def _occupancy(
+    checker: ContactChecker, lo: np.ndarray, shape: np.ndarray, robot: np.ndarray
+) -> np.ndarray:
+    """Grid cells (shape) whose centre is within the robot's radius at an obstacle's
+    heights (``robot``: its points, distance and height) of that obstacle's footprint."""
+    m, d = checker.model, checker.data
+    blocked = np.zeros(tuple(shape), dtype=bool)
+    xs = lo[0] + CELL * np.arange(shape[0])
+    ys = lo[1] + CELL * np.arange(shape[1])
+    attached = checker.attached_body
+    for g in range(m.ngeom):
+        b = int(m.geom_bodyid[g])
+        if (
+            checker.robot[b]
+            or b == attached
+            or (b == 0 and m.geom_type[g] == mujoco.mjtGeom.mjGEOM_PLANE)
+        ):
+            continue
+        if not (m.geom_contype[g] or m.geom_conaffinity[g]):
+            continue
+        c = _corners(m, d, g)
+        if c[:, 2].max() < 0.01 or c[:, 2].min() > ROBOT_HEIGHT:
+            continue
+        band = (robot[:, 1] >= c[:, 2].min() - CLEARANCE) & (
+            robot[:, 1] <= c[:, 2].max() + CLEARANCE
+        )
+        if not band.any():
+            continue  # nothing of the robot at this height
+        radius = float(robot[band, 0].max()) + CLEARANCE
+        (x0, y0), (x1, y1) = c[:, :2].min(axis=0), c[:, :2].max(axis=0)
+        dx = np.maximum(0.0, np.maximum(x0 - xs, xs - x1))[:, None]
+        dy = np.maximum(0.0, np.maximum(y0 - ys, ys - y1))[None, :]
+        blocked |= dx * dx + dy * dy < radius * radius
+    return blocked
+
+
+def _astar(blocked: np.ndarray, a: tuple, b: tuple) -> list[tuple] | None:
+    """8-connected A* on the grid from cell ``a`` to cell ``b``; the cells, or None."""
+    moves = [(i, j) for i in (-1, 0, 1) for j in (-1, 0, 1) if (i, j) != (0, 0)]
+    h = lambda c: math.hypot(c[0] - b[0], c[1] - b[1])  # noqa: E731
+    frontier = [(h(a), 0.0, a)]
+    came: dict[tuple, tuple | None] = {a: None}
+    cost = {a: 0.0}
+    while frontier:
+        _, g, c = heapq.heappop(frontier)
+        if c == b:
+            out = [c]
+            while came[out[-1]] is not None:
+                out.append(came[out[-1]])  # type: ignore[arg-type]
+            return out[::-1]
+        if g > cost[c]:
+            continue
+        for i, j in moves:
+            n = (c[0] + i, c[1] + j)
+            if not (0 <= n[0] < blocked.shape[0] and 0 <= n[1] < blocked.shape[1]) or blocked[n]:
+                continue
+            ng = g + math.hypot(i, j)
+            if ng < cost.get(n, math.inf):
+                cost[n], came[n] = ng, c
+                heapq.heappush(frontier, (ng + h(n), ng, n))
+    return None
+
+
+def _shortcut(blocked: np.ndarray, path: list[tuple]) -> list[tuple]:
+    """The path's cells kept only where the straight line to the next kept cell would
+    cross a blocked cell."""
+    out = [path[0]]
+    k = 0
+    while k < len(path) - 1:
+        j = len(path) - 1
+        while j > k + 1 and not _clear(blocked, path[k], path[j]):
+            j -= 1
+        out.append(path[j])
+        k = j
+    return out
+
+
+def _clear(blocked: np.ndarray, a: tuple, b: tuple) -> bool:
+    n = max(abs(b[0] - a[0]), abs(b[1] - a[1])) * 2 + 1
+    for t in np.linspace(0.0, 1.0, n):
+        c = (round(a[0] + t * (b[0] - a[0])), round(a[1] + t * (b[1] - a[1])))
+        if blocked[c]:
+            return False
+    return True

@@ -1,0 +1,108 @@
+"""Tuning constants of the skills, each with the reason for its value.
+
+One frozen :class:`SkillParams` holds every constant the skills and their executions
+use; :data:`DEFAULT_PARAMS` is what every skill uses unless given another. Units: [m],
+[rad], [s], [m/s].
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+from planners.errors import ConfigError
+
+
+@dataclass(frozen=True)
+class SkillParams:
+    """Constants of the skills (defaults and the reason for each).
+
+    Attributes:
+        pregrasp_offset: distance of the pre-grasp from the grasp, against the approach
+            [m]: the fingers are 7.7 cm long and must clear the handle's standoff.
+        pick_offset: the same for Pick [m]: the free motion ends this far from the
+            object, clear of it even where the fast arm strays a few centimetres from
+            its plan (the slow approach line does the rest).
+        line_step: spacing of the poses of a Cartesian line [m] (arcs: this arc
+            length at the gripper): a few IK iterations each, smooth enough for the
+            position servos.
+        approach_speed: TCP speed of approaches and retreats [m/s] (slow: contact).
+        open_speed: TCP speed of opening motions [m/s]: a household pace that the arm
+            follows with its speed limits at 70 %.
+        probe_speed: TCP speed of the probing motions [m/s].
+        grip_time: time the fingers get to close or open [s]: they close on a handle in
+            0.1 s and squeeze with their full force from then on.
+        settle_time: hold after a motion before the next phase [s].
+        drawer_travel: how far OpenDrawer pulls by default [m] (capped before the
+            believed limit): far enough to lower the 0.10 x 0.06 m object into it.
+        door_angle: how far OpenDoor opens a side-hinged door by default [rad]: 80
+            degrees leaves the cell open for an object carried in from the front.
+        flap_angle: how far OpenDoor lifts a top-hinged flap by default [rad] (their
+            limits are 1.20-1.57 rad): high enough to carry the object in under it.
+        drop_angle: how far OpenDoor lowers a bottom-hinged (drop-down) flap by default
+            [rad]: as far as it goes (capped before the limit), so the open flap lies
+            nearly flat and the arm reaches over it.
+        limit_margin_m, limit_margin_rad: an opening stops this short of the believed
+            joint limit [m], [rad], so it never drives the part into its stop.
+        probe_distance: how far Push, PullV and PullH move the gripper [m]: enough to
+            move a free part visibly (a 4 cm shift shows in the head camera's point
+            cloud), little enough that a wrong direction seldom drags the cabinet.
+        retreat_distance: how far the gripper backs off after releasing [m].
+        lift_height: how high Pick lifts the object [m].
+        place_clearance: height from which Place lowers an object held from above [m]
+            (clears a drawer's walls).
+        insert_clearance: distance from which Place carries an object held level into
+            a cell [m]: the whole object starts outside the front.
+        place_drop: gap left under the object when it is released [m].
+        tracking_tolerance: the gripper more than this behind its commanded pose along a
+            line means the arm is blocked (status ``collision``) [m]: beyond the arm's
+            compliance under its effort limits at line speeds (a few centimetres).
+        free_tolerance: the same for free motions [m]: there a fast arm lags a few
+            centimetres behind its command, and only a blocked one falls far behind.
+        time_budget: simulated time budget of one skill [s].
+        plan_timeout: OMPL time budget per arm motion and planner [s] (wall).
+        drive_tolerance: the base is driven only to targets farther than this [m].
+        record_period: trajectory recording period [s].
+    """
+
+    pregrasp_offset: float = 0.08
+    pick_offset: float = 0.12
+    line_step: float = 0.02
+    approach_speed: float = 0.15
+    open_speed: float = 0.2
+    probe_speed: float = 0.1
+    grip_time: float = 0.25
+    settle_time: float = 0.15
+    drawer_travel: float = 0.25
+    door_angle: float = 1.40
+    flap_angle: float = 1.30
+    drop_angle: float = 1.57
+    limit_margin_m: float = 0.02
+    limit_margin_rad: float = 0.05
+    probe_distance: float = 0.04
+    retreat_distance: float = 0.08
+    lift_height: float = 0.12
+    place_clearance: float = 0.12
+    insert_clearance: float = 0.2
+    place_drop: float = 0.005
+    tracking_tolerance: float = 0.08
+    free_tolerance: float = 0.2
+    time_budget: float = 60.0
+    plan_timeout: float = 1.0
+    drive_tolerance: float = 0.02
+    record_period: float = 0.02
+
+    def __post_init__(self) -> None:
+        for f in dataclasses.fields(self):
+            v = getattr(self, f.name)
+            if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+                raise ConfigError(f"SkillParams.{f.name} must be a finite number, got {v!r}")
+            if v <= 0 and f.name != "place_drop":
+                raise ConfigError(f"SkillParams.{f.name} must be > 0, got {v!r}")
+            if v < 0:
+                raise ConfigError(f"SkillParams.{f.name} must be >= 0, got {v!r}")
+
+
+#: The parameters every skill uses unless given others.
+DEFAULT_PARAMS = SkillParams()

@@ -1,0 +1,162 @@
+"""Where the object goes in a cabinet part, and with which grasp it gets there.
+
+:func:`place_target` turns "put the object into this part" into a pose ``p`` for
+:class:`~strug_manip.control.skills.Place` and the grasp
+:class:`~strug_manip.control.skills.Pick` must take for it:
+
+- an open **drawer**: lowered from above (``top`` grasp) into the part of the drawer's
+  box that is out of the carcass, resting on its bottom. The box must be out far
+  enough for the object and the opened fingers (:data:`FINGER_SPAN`) with
+  :data:`CLEARANCE` all round; the object lies along the pull (fingers across the box)
+  where that fits, else across it.
+- a **cell** (behind an open door, or an open shelf): carried in level from the front
+  (``side`` grasp), resting on the cell's floor :data:`INSERT` behind the front; it
+  comes in from as high above its place as the cell's opening leaves room for (up to
+  :data:`MAX_LIFT`), over the cell's front edge and an open drop-down flap.
+
+Poses are ``T_world_object`` of the object's box (its x: the 0.10 m side, y: the
+0.06 m side the fingers close across, z up). Raises :class:`~planners.errors.ConfigError`
+naming the sizes when the object does not fit.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from planners.errors import ConfigError
+from strug_manip.objects.generator import CabinetSpec, PartSpec, axis_angle
+from strug_manip.world.scene import OBJECT_HALF_SIZE
+
+#: Span of the fully opened fingers, outer faces [m] (2 x (0.05 travel + 0.0149)).
+FINGER_SPAN = 0.13
+#: Clearance kept between the object (or the fingers) and every wall [m].
+CLEARANCE = 0.01
+#: The carcass's front edge: the drawer box counts as out of the carcass this far in
+#: front of the front plane [m] (the gripper comes down past the cabinet's top edge).
+FRONT_MARGIN = 0.01
+#: How far behind the front plane (and the door's thickness) the object's centre goes
+#: into a cell [m]: the whole object inside, the palm's front face just inside too.
+INSERT = 0.08
+#: Height of a level-held object with the hand around it, from the object's bottom
+#: [m]: the palm's top is 7.5 mm above the object's (the TCP 1 cm above its centre).
+HELD_HEIGHT = 0.0925
+#: Behind a drop-down flap, the object comes in pitched down by this [rad] (its far
+#: end low) and is let go this high above the floor [m] (the tilted box's lowest edge
+#: 2 cm up), whence it drops flat onto the floor.
+FLAP_PITCH = 0.35
+FLAP_DROP = 0.02 + 0.05 * 0.343
+#: Highest start above its place of an object carried into a cell [m].
+MAX_LIFT = 0.15
+
+
+@dataclass(frozen=True)
+class PlaceTarget:
+    """Where the object goes and how it must be held.
+
+    Attributes:
+        p: ``T_world_object`` of the object resting there, (4, 4) [m].
+        grasp: ``top`` or ``side`` (the :class:`~strug_manip.control.skills.Pick` grasp).
+        lift: how much higher than ``p`` the placing motion starts [m] (Place's
+            ``lift``).
+    """
+
+    p: np.ndarray
+    grasp: str
+    lift: float = 0.0
+
+
+def _cell_place(
+    part: PartSpec, q: float, half: np.ndarray, link: str
+) -> tuple[np.ndarray, float, float]:
+    """Object centre (3,) in a cell (object frame), the lift to come in with, and the
+    pitch to hold it at [rad].
+
+    The object goes :data:`INSERT` behind the front, across the cell's width in the
+    middle of the part of the opening an open door leaves free (a side door at angle
+    ``q`` still covers ``w cos q + t sin q`` of it next to its hinge; a top flap hangs
+    ``h cos q + t`` down into it), resting on the floor. It comes in from as high as the
+    free height allows (up to :data:`MAX_LIFT`: over the front edge and a drop-down
+    flap's edge), except under a top flap; behind a drop-down flap it comes in
+    pitched down by :data:`FLAP_PITCH` (the wrist and forearm, out over the open flap,
+    ride higher) and is let go :data:`FLAP_DROP` above the floor, onto which it drops.
+    """
+    center = np.asarray(part.interior_center, dtype=float)
+    size = np.asarray(part.interior_size, dtype=float)
+    front, floor = center[0] + size[0] / 2, center[2] - size[2] / 2
+    y_lo, y_hi = center[1] - size[1] / 2, center[1] + size[1] / 2
+    top = center[2] + size[2] / 2
+    lift_ok = True
+    drop = pitch = 0.0
+    if part.joint_type == "revolute" and part.hinge is not None:
+        panel = part.geoms[0].size  # (thickness, width, height) of the door's panel
+        t = float(panel[0])
+        if part.hinge in ("left", "right"):
+            cover = float(panel[1]) * max(np.cos(q), 0.0) + t * abs(np.sin(q))
+            if part.hinge == "left":  # the viewer's left: -y of the object frame
+                y_lo += cover
+            else:
+                y_hi -= cover
+        elif part.hinge == "top":
+            top -= float(panel[2]) * max(np.cos(q), 0.0) + t
+            lift_ok = False
+        else:  # a drop-down flap: the wrist, out over it, must stay above its panel
+            drop, pitch = FLAP_DROP, FLAP_PITCH
+    width, height = y_hi - y_lo, top - floor
+    need = (2 * half[0] + INSERT, FINGER_SPAN + 2 * CLEARANCE, HELD_HEIGHT + CLEARANCE)
+    if size[0] < need[0] or width < need[1] or height < need[2]:
+        raise ConfigError(
+            f"cell {link} leaves {size[0]:.3f} x {width:.3f} x {height:.3f} m (depth, "
+            f"free width, free height) at joint position {q:.3f}: the object carried in "
+            f"needs {need[0]:.3f} x {need[1]:.3f} x {need[2]:.3f} m"
+        )
+    lift = float(np.clip(height - HELD_HEIGHT - CLEARANCE, 0.0, MAX_LIFT)) if lift_ok else 0.0
+    center = np.array([front - INSERT, 0.5 * (y_lo + y_hi), floor + half[2] + drop])
+    return center, lift, pitch
+
+
+def place_target(spec: CabinetSpec, link: str, q: float, T_world_object: np.ndarray) -> PlaceTarget:
+    """The pose to put the object into part ``link`` of ``spec`` at joint position ``q``
+    [m or rad], the cabinet frame at ``T_world_object`` (4, 4).
+
+    Raises:
+        UnknownNameError: no part ``link``.
+        ConfigError: the part has no interior (a panel), or the object does not fit
+            (a drawer not out far enough, a cell too small), the sizes named.
+    """
+    part = spec.part(link)
+    if part.interior_center is None or part.interior_size is None:
+        raise ConfigError(f"part {link} ({part.kind}) has no interior to put an object in")
+    half = np.array(OBJECT_HALF_SIZE)
+    size = np.asarray(part.interior_size, dtype=float)
+    T = np.asarray(T_world_object, dtype=float)
+    if part.joint_type == "prismatic":
+        center = part.point_at(part.interior_center, q)
+        back, front_wall = center[0] - size[0] / 2, center[0] + size[0] / 2
+        start = max(back, spec.depth / 2 + FRONT_MARGIN)  # out of the carcass
+        out = front_wall - start
+        width = size[1]
+        along = out >= 2 * half[0] + 2 * CLEARANCE and width >= FINGER_SPAN + 2 * CLEARANCE
+        across = out >= FINGER_SPAN + 2 * CLEARANCE and width >= 2 * half[0] + 2 * CLEARANCE
+        if not (along or across):
+            raise ConfigError(
+                f"drawer {link} is out {out:.3f} m of the carcass ({width:.3f} m wide inside): "
+                f"the object ({2 * half[0]:.2f} x {2 * half[1]:.2f} m) needs "
+                f"{2 * half[0] + 2 * CLEARANCE:.2f} x {FINGER_SPAN + 2 * CLEARANCE:.2f} m"
+            )
+        local = np.array([0.5 * (start + front_wall), center[1], center[2] - size[2] / 2 + half[2]])
+        yaw = 0.0 if along else 0.5 * np.pi
+        grasp = "top"
+        lift = pitch = 0.0
+    else:
+        local, lift, pitch = _cell_place(part, q, half, link)
+        yaw = 0.0
+        grasp = "side"
+    p = np.eye(4)
+    # Pitch: the object's x (out of the front) tilted up, so the grasp's approach (its
+    # -x, into the cabinet) tilts down.
+    R = axis_angle(np.array([0.0, 0.0, 1.0]), yaw) @ axis_angle(np.array([0.0, 1.0, 0.0]), -pitch)
+    p[:3, :3] = T[:3, :3] @ R
+    p[:3, 3] = T[:3, :3] @ local + T[:3, 3]
+    return PlaceTarget(p, grasp, lift)

@@ -1,0 +1,609 @@
+"""The skills' planning twin: the same skill plan, run by the Fetch's hand alone.
+
+A search simulates skills thousands of times on the particles of a belief; the full
+robot costs a drive, an untuck, OMPL and seconds of arm physics per run. The twin runs
+the same :class:`~strug_manip.control.plan.SkillPlan` in a world of the same cabinet
+with the Fetch's floating hand (:mod:`strug_manip.world.floating_gripper`) and returns
+the same :class:`~strug_manip.control.outcome.Outcome`:
+
+1. **reachability**: the full robot's base placement search, run kinematically (the
+   IK of the pre-grasp and every line, no collision checks; cached per plan and base
+   pose, so it is shared by every particle): no placement is ``ik_infeasible``, as for
+   the full robot; a placement gives each line's joint path, hence its duration under
+   the one timing law (:mod:`.timing`), the same as the full robot's;
+2. **strength**: the hand's servos get the force and torque the Fetch's joints can
+   exert at the grasp: along each world axis ``min_j tau_j / |J_j|`` over the torso
+   and arm joints (and the base's on whole-body lines), ``tau`` their effort limits and
+   ``J`` the hand's Jacobian at the placement's grasp configuration;
+3. **physics**: the hand starts at the pre-grasp (the free motion of the full robot,
+   collision free by construction, is not simulated), then follows the lines (their
+   Cartesian poses, on the same schedule as the arm's joint path) and grips, with the
+   same settle and grip times, the same monitors (a lost grasp, the hand held back
+   more than the tracking tolerance) and the same facts measured at the end.
+
+A twin's state (:meth:`PlanningTwin.snapshot`) includes where the full robot's base is
+believed to stand (the ``robot_base`` mocap body), from which the next placement starts.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+from mujoco import rollout
+
+from planners.errors import ConfigError
+from strug_manip.control import timing
+from strug_manip.control.contacts import HAND_BODIES
+from strug_manip.control.context import ControlContext
+from strug_manip.control.grasps import held_grasp
+from strug_manip.control.outcome import Outcome, SkillStop, Status
+from strug_manip.control.params import DEFAULT_PARAMS, SkillParams
+from strug_manip.control.placement import Placement, find_placement
+from strug_manip.control.plan import Grip, Line, SkillPlan
+from strug_manip.objects.generator import CabinetSpec
+from strug_manip.robot.fetch import (
+    ACTUATORS,
+    ARM_TORSO_JOINTS,
+    BASE_JOINTS,
+    CARRY,
+    FINGERS_EMPTY,
+    GRIPPER_JOINTS,
+    GRIPPER_OPEN,
+    GRIPPER_SITE,
+    GRIPPER_SQUEEZE,
+    TUCK,
+    speed_limits,
+)
+from strug_manip.world.floating_gripper import BALL, INTEGRAL_TIME, SLIDES, TRANSLATION_KP
+from strug_manip.world.scene import SceneConfig
+from strug_manip.world.sim import ManipulationWorld, WorldState
+
+#: The twin's physics step [s]: twice the full robot's; the stiff contacts and joint
+#: stops (a 4 ms time constant) soften to MuJoCo's floor of two steps, and the twin still
+#: agrees with the full robot (``tools/eval_skills.py`` measures it).
+TIMESTEP = 0.004
+#: After its last release the hand leaves the scene (its geoms stop colliding: the full
+#: robot backs away and stows) and the cabinet and object settle for this long [s].
+COAST_TIME = 0.3
+#: Where the TCP (the ``gripper`` site) is in the hand's frame [m] (fetch.xml).
+TCP_OFFSET = 0.02
+#: Bounds of the hand's force [N] and torque [N m] limits: at least what a wrist can
+#: always push, at most the base's 300 N.
+FORCE_BOUNDS = (10.0, 300.0)
+TORQUE_BOUNDS = (2.0, 60.0)
+#: The base pose and arm speeds the twin assumes when none is given.
+_BASE_SPEED = np.array([0.3, 0.3, 0.9])
+
+
+class PlanningTwin:
+    """A cabinet and the Fetch's floating hand: where skills are simulated fast.
+
+    Args:
+        spec: the cabinet (e.g. a belief particle), compiled in memory.
+        config: the rest of the scene (default: the built-in one); its cabinet, robot and
+            time step are replaced by ``spec``, the floating hand and :data:`TIMESTEP`.
+        ctx: shared IK solvers and the placement cache (default: a new context).
+        params: the skills' constants (default :data:`DEFAULT_PARAMS`).
+    """
+
+    def __init__(
+        self,
+        spec: CabinetSpec,
+        config: SceneConfig | None = None,
+        ctx: ControlContext | None = None,
+        params: SkillParams = DEFAULT_PARAMS,
+    ) -> None:
+        if not isinstance(spec, CabinetSpec):
+            raise ConfigError(f"spec must be a CabinetSpec, got {spec!r}")
+        base = config or SceneConfig()
+        cfg = dataclasses.replace(
+            base, cabinet_spec=spec, cabinet_folder=None, robot="gripper", timestep=TIMESTEP
+        )
+        self.world = ManipulationWorld(cfg)
+        self.ctx = ctx or ControlContext()
+        self.params = params
+        m = self.world.model
+        self._slide_adr = np.array([m.jnt_qposadr[m.joint(j).id] for j in SLIDES])
+        self._slide_dof = np.array([m.jnt_dofadr[m.joint(j).id] for j in SLIDES])
+        self._ball_adr = int(m.jnt_qposadr[m.joint(BALL).id])
+        self._ball_dof = int(m.jnt_dofadr[m.joint(BALL).id])
+        self._slide_act = np.array([m.actuator(j).id for j in SLIDES])
+        self._slide_ctrl = np.array([self.world.ctrl_index(j) for j in SLIDES])
+        self._rot_act = m.actuator(BALL).id
+        self._rot_ctrl = self.world.ctrl_index(BALL)
+        self._grip_ctrl = self.world.ctrl_index("gripper")
+        self._site = m.site(GRIPPER_SITE).id
+        self._tendon = m.tendon("gripper").id
+        self._base_mocap = int(m.body_mocapid[m.body("robot_base").id])
+        self._obj_adr = int(m.jnt_qposadr[m.joint("object/free").id])
+        self._fingers = [m.jnt_qposadr[m.joint(j).id] for j in GRIPPER_JOINTS]
+        self.vmax = speed_limits(self.ctx.ik.model)
+        hand = {m.body(b).id for b in HAND_BODIES}
+        self._hand_geoms = [g for g in range(m.ngeom) if int(m.geom_bodyid[g]) in hand]
+        self._hand_collide = {g: _collide(m, g) for g in self._hand_geoms}
+        self._obj_body = m.body("object").id
+        self._obj_geom = m.geom("object").id
+        self._obj_collide = _collide(m, self._obj_geom)
+        self.reset()
+
+    # -- state -------------------------------------------------------------------------
+    def reset(
+        self, part_positions: dict[str, float] | None = None, robot_base: np.ndarray | None = None
+    ) -> None:
+        """The scene at rest (the hand parked, the object on its table), the parts at
+        ``part_positions``, the full robot's base believed at ``robot_base`` (x, y, yaw;
+        default the origin)."""
+        self.world.reset(part_positions)
+        self.set_robot_base(np.zeros(3) if robot_base is None else robot_base)
+
+    def set_robot_base(self, base: np.ndarray) -> None:
+        """Where the full robot's base is believed to stand (x [m], y [m], yaw [rad])."""
+        b = np.asarray(base, dtype=float)
+        d = self.world.data
+        d.mocap_pos[self._base_mocap] = [b[0], b[1], 0.0]
+        d.mocap_quat[self._base_mocap] = [np.cos(b[2] / 2), 0.0, 0.0, np.sin(b[2] / 2)]
+
+    @property
+    def robot_base(self) -> np.ndarray:
+        """The believed base pose of the full robot, (3,)."""
+        d = self.world.data
+        q = d.mocap_quat[self._base_mocap]
+        yaw = 2.0 * np.arctan2(q[3], q[0])
+        return np.array([*d.mocap_pos[self._base_mocap][:2], yaw])
+
+    def snapshot(self) -> WorldState:
+        """The whole state (physics, the believed robot base)."""
+        return self.world.snapshot()
+
+    def restore(self, state: WorldState) -> None:
+        """Back to a :meth:`snapshot`."""
+        self.world.restore(state)
+
+    # -- the run -----------------------------------------------------------------------
+    def run(self, plan: SkillPlan) -> Outcome:
+        """Simulate ``plan`` (see the module docstring); never raises for a failure of
+        the skill."""
+        return run_batch([self], plan)[0]
+
+    def _placement(self, plan: SkillPlan) -> Placement:
+        base = self.robot_base
+        reach = np.array(TUCK if plan.carrying is None else CARRY[held_grasp(plan.carrying[1])])
+        return self.ctx.placement(
+            ("twin", plan.key, base.round(4).tobytes()),
+            lambda: find_placement(
+                plan, self.ctx.ik, self.ctx.wb_ik, base, (np.array(TUCK), reach),
+                (self.vmax, _BASE_SPEED),
+            ),
+        )  # fmt: skip
+
+    def _start(self, prog: Program) -> None:
+        """The hand where the program starts, at rest, with the strength of the arm
+        there; the carried object in its fingers."""
+        plan = prog.plan
+        touches = plan.carrying is not None or any("object" in ln.touch for ln in plan.lines)
+        self._object_idle(not touches)
+        self._strength(prog.placement)
+        self._set_hand(prog.start)
+        m, d = self.world.model, self.world.data
+        if plan.carrying is not None:
+            T_wo = prog.start @ plan.carrying[1]
+            d.qpos[self._obj_adr : self._obj_adr + 3] = T_wo[:3, 3]
+            q = np.empty(4)
+            mujoco.mju_mat2Quat(q, np.ascontiguousarray(T_wo[:3, :3]).reshape(9))
+            d.qpos[self._obj_adr + 3 : self._obj_adr + 7] = q
+            d.qvel[m.jnt_dofadr[m.joint("object/free").id] :][:6] = 0.0
+            # The fingers as the grasp left them: against the box's 0.06 m sides.
+            for a in self._fingers:
+                d.qpos[a] = 0.029
+            self._grip(True)
+        else:
+            for a in self._fingers:
+                d.qpos[a] = GRIPPER_OPEN
+            self._grip(False)
+        mujoco.mj_forward(m, d)
+
+    def _set_hand(self, T: np.ndarray) -> None:
+        """Put the hand (its TCP) at ``T`` (4, 4), at rest, its servo targets there."""
+        d = self.world.data
+        origin = T[:3, 3] - TCP_OFFSET * T[:3, 0]
+        q = np.empty(4)
+        mujoco.mju_mat2Quat(q, np.ascontiguousarray(T[:3, :3]).reshape(9))
+        d.qpos[self._slide_adr] = origin
+        d.qpos[self._ball_adr : self._ball_adr + 4] = q
+        d.qvel[self._slide_dof] = 0.0
+        d.qvel[self._ball_dof : self._ball_dof + 3] = 0.0
+        d.act[:] = 0.0  # the servos' integrals
+        self._command(origin, np.zeros(3), q)
+
+    def _command(self, origin: np.ndarray, velocity: np.ndarray, quat: np.ndarray) -> None:
+        d = self.world.data
+        d.ctrl[self._slide_ctrl] = origin
+        d.ctrl[self._slide_ctrl + 1] = velocity
+        d.ctrl[self._rot_ctrl : self._rot_ctrl + 4] = quat
+
+    def _grip(self, closed: bool) -> None:
+        self.grip_cmd = GRIPPER_SQUEEZE if closed else GRIPPER_OPEN
+        self.world.data.ctrl[self._grip_ctrl] = self.grip_cmd
+
+    def _strength(self, placement: Placement) -> None:
+        """The hand's force and torque limits: the arm's at the grasp (the end of the
+        first line, else the pre-grasp)."""
+        m = self.world.model
+        base, q = placement.start_of(1 if placement.lines else 0)
+        whole_body = any(bp is not None for bp in placement.base_paths)
+        force, torque = arm_strength(self.ctx, base, q, whole_body)
+        ki = TRANSLATION_KP / INTEGRAL_TIME
+        for i, a in enumerate(self._slide_act):
+            m.actuator_forcerange[a] = [-force[i], force[i]]
+            m.actuator_dynprm[a, 0] = force[i] / ki  # the integral alone: at most that
+        m.actuator_forcerange[self._rot_act] = [0.0, torque]
+
+    # -- the program ------------------------------------------------------------------
+    def program(self, plan: SkillPlan) -> Program:
+        """The controls that run ``plan`` on the twin, from its placement (raises
+        :class:`SkillStop` ``ik_infeasible`` if there is none)."""
+        placement = self._placement(plan)
+        plan = placement.plan
+        dt = self.world.model.opt.timestep
+        p = self.params
+        pos: list[np.ndarray] = []  # commanded TCP position and orientation, per step
+        quat: list[np.ndarray] = []
+        grips, names, held, holds = [], [], [], []
+        here = (plan.pre[:3, 3], _quats(plan.pre[None, :3, :3])[0])
+        grip = GRIPPER_SQUEEZE if plan.carrying is not None else GRIPPER_OPEN
+        start = plan.pre
+
+        def add(ps: np.ndarray, qs: np.ndarray, name: str, hold: bool, holding: bool) -> None:
+            pos.append(ps)
+            quat.append(qs)
+            grips.append(np.full(len(ps), grip))
+            names.append(np.full(len(ps), name))
+            held.append(np.full(len(ps), holding))
+            holds.append(np.full(len(ps), hold))
+
+        def hold(seconds: float, name: str, holding: bool) -> None:
+            n = max(1, round(seconds / dt))
+            add(np.repeat(here[0][None], n, axis=0), np.repeat(here[1][None], n, axis=0),
+                name, True, holding)  # fmt: skip
+
+        k = 0
+        released = False
+        for ph in plan.phases:
+            if isinstance(ph, Grip):
+                grip = GRIPPER_SQUEEZE if ph.closed else GRIPPER_OPEN
+                hold(p.grip_time, ph.name, False)
+                released = not ph.closed
+                continue
+            if released:  # the hand only backs away from here: the coast replaces it
+                break
+            if k == 0 and ph.name == "approach":  # free space: the hand starts at its end
+                start = ph.poses[-1]
+                here = (start[:3, 3], _quats(start[None, :3, :3])[0])
+                k += 1
+                continue
+            ps, qs = _line_commands(ph, placement, k, here, self.vmax, dt)
+            add(ps, qs, ph.name, False, ph.holding)
+            here = (ps[-1], qs[-1])
+            hold(p.settle_time, ph.name, ph.holding)
+            k += 1
+        cat = np.concatenate
+        coast = max(1, round(COAST_TIME / dt)) if released else 0
+        return Program(plan, placement, cat(pos), cat(quat), cat(grips), cat(names), cat(held),
+                       cat(holds), start, coast)  # fmt: skip
+
+    def controls(self, prog: Program) -> np.ndarray:
+        """The twin's control vectors at every step of ``prog``, (nstep, nu)."""
+        dt = self.world.model.opt.timestep
+        origin = prog.pos - TCP_OFFSET * _x_axes(prog.quat)
+        vel = np.zeros_like(origin)
+        vel[1:] = np.diff(origin, axis=0) / dt
+        vel[prog.holds] = 0.0
+        ctrl = np.repeat(self.world.data.ctrl[None].copy(), len(origin), axis=0)
+        ctrl[:, self._slide_ctrl] = origin
+        ctrl[:, self._slide_ctrl + 1] = vel
+        ctrl[:, self._rot_ctrl : self._rot_ctrl + 4] = prog.quat
+        ctrl[:, self._grip_ctrl] = prog.grip
+        return ctrl
+
+    def judge(self, prog: Program, states: np.ndarray) -> tuple[int, Status, str, str]:
+        """The first step whose monitors stop the run (a lost grasp where the fingers
+        should hold, the hand more than the tracking tolerance behind its command,
+        checked every 10 ms as on the full robot) and why; the last step if none."""
+        m = self.world.model
+        qpos = states[:, 1 : 1 + m.nq]
+        fingers = 0.5 * (qpos[:, self._fingers[0]] + qpos[:, self._fingers[1]])
+        tcp = qpos[:, self._slide_adr] + TCP_OFFSET * _x_axes(
+            qpos[:, self._ball_adr : self._ball_adr + 4]
+        )
+        lag = np.linalg.norm(tcp - prog.pos, axis=1)
+        every = max(1, round(0.01 / m.opt.timestep))
+        check = np.zeros(len(lag), dtype=bool)
+        check[every - 1 :: every] = True
+        check[np.flatnonzero(np.diff(prog.names != np.roll(prog.names, -1)))] = True
+        check[-1] = True
+        lost = check & prog.held & (fingers < FINGERS_EMPTY)
+        blocked = check & (lag > self.params.tracking_tolerance)
+        blocked &= ~prog.holds | np.r_[prog.holds[1:] != prog.holds[:-1], False]
+        for k in range(len(lag)):
+            if lost[k]:
+                return (
+                    k,
+                    Status.GRASP_LOST,
+                    f"the fingers closed on nothing ({prog.names[k]})",
+                    str(prog.names[k]),
+                )
+            if blocked[k]:
+                return (
+                    k,
+                    Status.COLLISION,
+                    (f"the gripper is held back {lag[k]:.3f} m from its path ({prog.names[k]})"),
+                    str(prog.names[k]),
+                )
+        return len(lag) - 1, Status.OK, "", ""
+
+    def finish(
+        self,
+        prog: Program,
+        states: np.ndarray,
+        judged: tuple[int, Status, str, str],
+        tail: np.ndarray | None,
+        t_wall: float,
+        physics: float,
+    ) -> Outcome:
+        """Set the twin to where the run stopped (after the coast if it ran to its end)
+        and report it."""
+        w, m = self.world, self.world.model
+        k, status, detail, phase = judged
+        parts0, cab0 = self._before
+        if tail is not None and len(tail):
+            states = np.concatenate([states[: k + 1], tail])
+            k = len(states) - 1
+        mujoco.mj_setState(m, w.data, states[k], _ROLLOUT_STATE)
+        mujoco.mj_forward(m, w.data)
+        self.grip_cmd = float(prog.grip[min(k, len(prog.grip) - 1)])
+        w.data.ctrl[self._grip_ctrl] = self.grip_cmd
+        if status is Status.OK:
+            self.set_robot_base(prog.placement.start_of(len(prog.placement.lines))[0])
+        every = max(1, round(self.params.record_period / m.opt.timestep))
+        rows = states[: k + 1 : every, 1 : 1 + m.nq]
+        times = states[: k + 1 : every, 0] - self.t0
+        return self._outcome(prog.plan, status, detail, phase, parts0, cab0, t_wall,
+                             prog.placement.seconds, times, rows, physics)  # fmt: skip
+
+    def ghost(self, on: bool) -> None:
+        """Take the hand out of (``on``) or back into the scene's collisions."""
+        m = self.world.model
+        for g in self._hand_geoms:
+            m.geom_contype[g] = 0 if on else self._hand_collide[g][0]
+            m.geom_conaffinity[g] = 0 if on else self._hand_collide[g][1]
+
+    def _object_idle(self, idle: bool) -> None:
+        """An object no skill touches rests where it is without its contacts (a
+        quarter of the twin's contacts otherwise), gravity compensated; ``False``
+        gives them back."""
+        m = self.world.model
+        m.geom_contype[self._obj_geom] = 0 if idle else self._obj_collide[0]
+        m.geom_conaffinity[self._obj_geom] = 0 if idle else self._obj_collide[1]
+        m.body_gravcomp[self._obj_body] = 1.0 if idle else 0.0
+        if idle:  # at rest where it lies
+            dof = m.jnt_dofadr[m.body_jntadr[self._obj_body]]
+            self.world.data.qvel[dof : dof + 6] = 0.0
+
+    # -- the report --------------------------------------------------------------------
+    def _outcome(
+        self, plan, status, detail, phase, parts0, cab0, t_wall, ik_seconds,
+        times=None, qpos=None, physics=0.0,
+    ) -> Outcome:  # fmt: skip
+        w = self.world
+        parts = w.part_positions()
+        fingers = float(w.data.ten_length[self._tendon])
+        if times is None:
+            times, qpos = np.zeros(0), np.zeros((0, w.model.nq))
+        return Outcome(
+            skill=plan.skill,
+            status=status,
+            detail=detail,
+            phase=phase,
+            part_motion={j: parts[j] - parts0[j] for j in parts},
+            part_units=w.part_units(),
+            part_positions=parts,
+            cabinet_displacement=w.cabinet_displacement(),
+            cabinet_motion=float(np.linalg.norm(w.cabinet_displacement_vector() - cab0)),
+            object_pose=w.object_pose(),
+            holding=getattr(self, "grip_cmd", GRIPPER_OPEN) == GRIPPER_SQUEEZE
+            and fingers > FINGERS_EMPTY,
+            times=times,
+            qpos=qpos,
+            sim_time=float(w.data.time) - self.t0,
+            wall_seconds=time.perf_counter() - t_wall,
+            ik_seconds=ik_seconds,
+            planning_seconds=0.0,
+            physics_seconds=physics,
+        )
+
+
+def _quats(R: np.ndarray) -> np.ndarray:
+    """Unit quaternions (w, x, y, z), (n, 4), of rotation matrices (n, 3, 3)."""
+    out = np.empty((len(R), 4))
+    for i in range(len(R)):
+        mujoco.mju_mat2Quat(out[i], np.ascontiguousarray(R[i]).reshape(9))
+    return out
+
+
+def _slerp(qa: np.ndarray, qb: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """Unit quaternions the fractions ``s`` (n,) of the way from ``qa`` to ``qb`` (each
+    (n, 4)) along the shortest arc, (n, 4)."""
+    qb = np.where((np.sum(qa * qb, axis=1) < 0)[:, None], -qb, qb)
+    theta = np.arccos(np.clip(np.sum(qa * qb, axis=1), -1.0, 1.0))
+    small = theta < 1e-6
+    sin = np.where(small, 1.0, np.sin(theta))
+    wa = np.where(small, 1.0 - s, np.sin((1.0 - s) * theta) / sin)
+    wb = np.where(small, s, np.sin(s * theta) / sin)
+    q = wa[:, None] * qa + wb[:, None] * qb
+    return q / np.linalg.norm(q, axis=1, keepdims=True)
+
+
+def _x_axes(q: np.ndarray) -> np.ndarray:
+    """The x axes (n, 3) of the rotations of unit quaternions ``q`` (n, 4)."""
+    w, x, y, z = q.T
+    return np.column_stack([1 - 2 * (y * y + z * z), 2 * (x * y + z * w), 2 * (x * z - y * w)])
+
+
+def arm_strength(
+    ctx: ControlContext, base: np.ndarray, q: np.ndarray, whole_body: bool
+) -> tuple[np.ndarray, float]:
+    """What the Fetch's hand can exert at base + torso + arm ``q``: the force along
+    each world axis [N] (3,) and a torque [N m], ``min_j tau_j / |J_ij|`` over the torso
+    and arm joints (with ``whole_body``, the base's too), clipped to
+    :data:`FORCE_BOUNDS` and :data:`TORQUE_BOUNDS`."""
+    ik = ctx.ik
+    m = ik.model
+    joints = (*BASE_JOINTS, *ARM_TORSO_JOINTS) if whole_body else ARM_TORSO_JOINTS
+    J = ik.jacobian(
+        {**dict(zip(BASE_JOINTS, base.tolist(), strict=True)),
+         **dict(zip(ARM_TORSO_JOINTS, q.tolist(), strict=True))}
+    )  # fmt: skip
+    jacp, jacr = J[:3], J[3:]
+    cols, tau = [], []
+    for j in joints:
+        jid = m.joint(j).id
+        cols.append(m.jnt_dofadr[jid])
+        a = m.actuator(ACTUATORS[j]).id
+        tau.append(float(np.max(np.abs(m.actuator_forcerange[a]))))
+    tau = np.array(tau)
+
+    def cap(J: np.ndarray) -> np.ndarray:
+        Jc = np.abs(J[:, cols])
+        with np.errstate(divide="ignore"):
+            return np.min(np.where(Jc > 1e-6, tau / np.maximum(Jc, 1e-12), np.inf), axis=1)
+
+    force = np.clip(cap(jacp), *FORCE_BOUNDS)
+    torque = float(np.clip(np.min(cap(jacr)), *TORQUE_BOUNDS))
+    return force, torque
+
+
+def _collide(m: mujoco.MjModel, g: int) -> tuple[int, int]:
+    """Geom ``g``'s collision bits (contype, conaffinity)."""
+    return int(m.geom_contype[g]), int(m.geom_conaffinity[g])
+
+
+#: What a rollout's states hold (MuJoCo's full physics: time, qpos, qvel, act, ...).
+_ROLLOUT_STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
+
+
+@dataclass(frozen=True, eq=False)
+class Program:
+    """A skill plan as the twin's step-by-step commands.
+
+    Attributes:
+        plan: the plan (its fingers maybe swapped, as the placement found it).
+        placement: the full robot's placement it is timed by.
+        pos: commanded TCP position at every step, (nstep, 3) [m].
+        quat: commanded hand orientation at every step (w, x, y, z), (nstep, 4).
+        grip: finger command at every step, (nstep,) [m].
+        names: the phase of every step, (nstep,).
+        held: the fingers should hold something at that step (monitored), (nstep,).
+        holds: the step belongs to a hold (settle or grip time), (nstep,).
+        start: where the hand starts, (4, 4): the pre-grasp, or the grasp (the end of
+            an approach, which is not simulated).
+        coast: steps simulated after the last release with the hand out of the scene
+            (the full robot backs away and stows; the cabinet settles), or 0.
+    """
+
+    plan: SkillPlan
+    placement: Placement
+    pos: np.ndarray
+    quat: np.ndarray
+    grip: np.ndarray
+    names: np.ndarray
+    held: np.ndarray
+    holds: np.ndarray
+    start: np.ndarray
+    coast: int
+
+
+def _line_commands(
+    line: Line,
+    placement: Placement,
+    k: int,
+    here: tuple[np.ndarray, np.ndarray],
+    vmax: np.ndarray,
+    dt: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The commanded TCP positions (n, 3) and orientations (n, 4) of line ``k`` every
+    ``dt``, from ``here`` (position, quaternion), on the schedule of the arm's joint
+    path (the full robot's timing)."""
+    base0, q0 = placement.start_of(k)
+    pts = timing.polyline(q0, placement.lines[k])
+    limits = vmax
+    if placement.base_paths[k] is not None:
+        pts = np.hstack([pts, timing.polyline(base0, placement.base_paths[k])])
+        limits = np.concatenate([vmax, _BASE_SPEED])
+    T = timing.duration(pts, limits, max(0.3, line.length / line.speed))
+    seg, frac = timing.schedule(pts, T, dt, limits)
+    ps = np.vstack([here[0][None], line.poses[:, :3, 3]])
+    qs = np.vstack([here[1][None], _quats(line.poses[:, :3, :3])])
+    pos = ps[seg] + frac[:, None] * (ps[seg + 1] - ps[seg])
+    return pos, _slerp(qs[seg], qs[seg + 1], frac)
+
+
+def run_batch(twins: list[PlanningTwin], plan: SkillPlan) -> list[Outcome]:
+    """Simulate ``plan`` on every twin (e.g. the particles of a search node), batched:
+    the twins whose plans time the same and whose models have the same size run in one
+    :func:`mujoco.rollout.rollout` call (controls computed once). Returns one
+    :class:`Outcome` per twin, as :meth:`PlanningTwin.run` would."""
+    outs: list[Outcome | None] = [None] * len(twins)
+    groups: dict[tuple, list[tuple[int, Program]]] = {}
+    for i, tw in enumerate(twins):
+        t_wall = time.perf_counter()
+        w = tw.world
+        tw.t0 = float(w.data.time)
+        tw._before = (w.part_positions(), w.cabinet_displacement_vector())
+        tw._t_wall = t_wall
+        try:
+            prog = tw.program(plan)
+        except SkillStop as stop:
+            outs[i] = tw._outcome(plan, stop.status, stop.detail, stop.phase or "plan",
+                                  *tw._before, t_wall, 0.0)  # fmt: skip
+            continue
+        tw._start(prog)
+        m = w.model
+        key = (id(prog.placement), m.nq, m.nv, m.na, m.nu, m.ngeom, m.nbody)
+        groups.setdefault(key, []).append((i, prog))
+    for members in groups.values():
+        ts = [twins[i] for i, _ in members]
+        prog = members[0][1]
+        states0 = []
+        for tw in ts:
+            st = np.empty(mujoco.mj_stateSize(tw.world.model, _ROLLOUT_STATE))
+            mujoco.mj_getState(tw.world.model, tw.world.data, st, _ROLLOUT_STATE)
+            states0.append(st)
+        ctrl = ts[0].controls(prog)
+        t = time.perf_counter()
+        states, _ = rollout.rollout(
+            [tw.world.model for tw in ts], ts[0].world.data, np.array(states0), ctrl[None],
+        )  # fmt: skip
+        physics = (time.perf_counter() - t) / len(ts)
+        judged = [tw.judge(p, st) for (_, p), tw, st in zip(members, ts, states, strict=True)]
+        coasting = [n for n, j in enumerate(judged) if j[1] is Status.OK and prog.coast]
+        tails: dict[int, np.ndarray] = {}
+        if coasting:
+            for n in coasting:
+                ts[n].ghost(True)
+            t = time.perf_counter()
+            tail, _ = rollout.rollout(
+                [ts[n].world.model for n in coasting], ts[0].world.data,
+                np.array([states[n][-1] for n in coasting]),
+                np.repeat(ctrl[-1:], prog.coast, axis=0)[None],
+            )  # fmt: skip
+            physics += (time.perf_counter() - t) / len(ts)
+            for n, tl in zip(coasting, tail, strict=True):
+                ts[n].ghost(False)
+                tails[n] = tl
+        for n, ((i, p), tw, st) in enumerate(zip(members, ts, states, strict=True)):
+            outs[i] = tw.finish(p, st, judged[n], tails.get(n), tw._t_wall, physics)
+    return [o for o in outs if o is not None]

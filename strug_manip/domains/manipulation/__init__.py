@@ -1,0 +1,2 @@
+"""The manipulation domains (Shelf, OpenDrawer, OpenDoor): what the tasks count as
+success and failure from a skill's facts (:mod:`strug_manip.domains.manipulation.rules`)."""

@@ -1,0 +1,104 @@
+"""The Fetch's hand without the Fetch: the floating gripper of the planning twin.
+
+:func:`add_floating_gripper` puts into a scene spec the Fetch's ``gripper_link`` subtree
+as ``models/fetch/fetch.xml`` has it (palm mesh, finger pads, finger joints, their
+coupling, tendon and servo, the ``gripper`` TCP site), carried by three slides along
+the world axes and a ball joint at the palm, and drives it like an arm would:
+
+- **translation**: one position servo with integral action per world axis (MuJoCo's
+  PID actuators, :data:`TRANSLATION_KP`, critically damped, integral time
+  :data:`INTEGRAL_TIME`) whose force limit the twin sets per run to what the Fetch's
+  joints can push along that axis at the grasp (:mod:`strug_manip.control.twin`);
+- **rotation**: a geodesic orientation servo on the ball joint (MuJoCo's SO3 actuator,
+  quaternion target, :data:`ROTATION_KP`), its torque norm limited likewise;
+- every body is gravity compensated, as the Fetch's arm is.
+
+A mocap body ``robot_base`` (no geometry) stands where the full robot's base is
+believed to be: its pose is part of the simulation state, so a snapshot of the twin
+carries it (the base placement of the next skill starts from there).
+
+Joint and actuator names: ``twin_x``, ``twin_y``, ``twin_z`` (slides), ``twin_rot``
+(ball); the fingers keep the Fetch's names (``r_gripper_finger_joint``, ...,
+actuator and tendon ``gripper``), so code reading the fingers works on both.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import mujoco
+import numpy as np
+
+from strug_manip.robot.fetch import FETCH_XML
+
+#: Slide joints (world x, y, z) and the ball joint of the floating gripper.
+SLIDES: tuple[str, str, str] = ("twin_x", "twin_y", "twin_z")
+BALL = "twin_rot"
+#: Translation servo gain [N/m]: the Fetch's arm servos (kp 600-3000 N m/rad on levers
+#: of 0.3-0.9 m) seen at the hand.
+TRANSLATION_KP = 3000.0
+#: Orientation servo gain [N m/rad]: the wrist servos' (kp 200-600 N m/rad).
+ROTATION_KP = 300.0
+#: Integral time of the translation servos [s] (the arm servos').
+INTEGRAL_TIME = 0.3
+#: Force [N] and torque [N m] limits until the twin sets them per run.
+DEFAULT_FORCE = 100.0
+DEFAULT_TORQUE = 20.0
+#: Mass of each carrier body [kg] (gravity compensated: only its inertia matters).
+CARRIER_MASS = 0.1
+#: Armature of the twin's finger joints [kg]: the finger servo (kp 10000 N/m) on the
+#: Fetch's 0.13 kg of finger and armature would ring at 350 rad/s, too fast for the
+#: twin's 4 ms step (the fingers chatter on a handle); with 0.5 kg it rings at 130
+#: rad/s. The fingers squeeze with their force limit either way (the grip is force
+#: controlled), they close in 0.1 s instead of 0.08 s.
+FINGER_ARMATURE = 0.5
+#: Where the gripper waits, out of the way, until a skill places it [m].
+PARK = (0.0, 0.0, 1.6)
+
+
+def add_floating_gripper(spec: mujoco.MjSpec) -> None:
+    """Add the floating gripper, its servos and the ``robot_base`` mocap to ``spec``."""
+    src = mujoco.MjSpec.from_file(str(FETCH_XML))
+    for key in list(src.keys):  # the robot's keyframe does not fit the twin
+        src.delete(key)
+    carrier = spec.worldbody
+    for name, axis in zip(SLIDES, np.eye(3), strict=True):
+        carrier = carrier.add_body(name=name + "_carrier", gravcomp=1.0)
+        carrier.add_joint(name=name, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=axis, damping=1.0)
+        carrier.mass = CARRIER_MASS
+        carrier.inertia = [1e-4, 1e-4, 1e-4]
+        carrier.explicitinertial = True
+    frame = carrier.add_frame()
+    # No prefix: the hand's parts keep the Fetch's names, so code reading the fingers,
+    # their tendon and servo, and the TCP site works on both. (MuJoCo warns that such a
+    # spec may not save as XML; it is never saved.)
+    previous = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(lambda message: None)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            frame.attach_body(src.body("gripper_link"), "", "")
+    finally:
+        mujoco.set_mju_user_warning(previous)
+    hand = spec.body("gripper_link")
+    hand.pos = [0.0, 0.0, 0.0]
+    for finger in ("r_gripper_finger_joint", "l_gripper_finger_joint"):
+        spec.joint(finger).armature = FINGER_ARMATURE
+    hand.add_joint(name=BALL, type=mujoco.mjtJoint.mjJNT_BALL, damping=0.05)
+    for mesh in list(spec.meshes):  # the attach brings every Fetch mesh; keep the palm's
+        if mesh.name != "gripper_link":
+            spec.delete(mesh)
+    for name in SLIDES:
+        act = spec.add_actuator(name=name, target=name, trntype=mujoco.mjtTrn.mjTRN_JOINT)
+        ki = TRANSLATION_KP / INTEGRAL_TIME
+        act.set_to_pid(kp=TRANSLATION_KP, dampratio=1.0, ki=ki, imax=DEFAULT_FORCE / ki)
+        act.forcelimited = True
+        act.forcerange = [-DEFAULT_FORCE, DEFAULT_FORCE]
+    rot = spec.add_actuator(name=BALL, target=BALL, trntype=mujoco.mjtTrn.mjTRN_JOINT)
+    rot.set_to_orientation(
+        kp=ROTATION_KP, dampratio=1.0, ctrlspec=int(mujoco.mjtCtrlChart.mjCHART_QUAT)
+    )
+    rot.forcelimited = True
+    rot.forcerange = [0.0, DEFAULT_TORQUE]
+    base = spec.worldbody.add_body(name="robot_base", mocap=True)
+    base.add_site(name="robot_base", size=[0.02, 0.02, 0.02], group=5)

@@ -1,0 +1,435 @@
+"""Evaluate the skills on generated cabinets: reach, risk, honest outcomes, probes,
+chains and the planning twin.
+
+Usage::
+
+    python tools/eval_skills.py --seeds 1000:1030 [--json] [--out DIR] [--workers 2]
+
+For every generator seed in ``A..B-1`` two scenes are built (a drawers-only and a
+doors-only cabinet, as the OpenDrawer and OpenDoor tasks draw them), and for every
+movable part with a handle (a flat front cannot be grasped):
+
+- **open** under the true model (:class:`OpenDrawer` for a drawer, :class:`OpenDoor`
+  for a door or flap; the grasps of :func:`handle_grasps` in turn until one is not
+  ``ik_infeasible``): a success is a run that ends ``ok``, with the part open enough
+  for the object (:func:`~strug_manip.domains.manipulation.rules.open_enough`) and
+  the cabinet not dragged; failures are counted by cause;
+- the **chain** from there when it opened: Pick (with the grasp the part's target
+  needs) then Place into the drawer / behind the door; a success is the object resting
+  inside the part (:func:`~strug_manip.domains.manipulation.rules.inside`);
+- **wrong models**: the two likeliest confusions of the part's kinematics (a drawer
+  taken for a door hinged left or right; a side door for a drawer or a door hinged on
+  the other side; a flap for a drawer or a flap hinged on the other edge), each
+  planned in a world of the believed cabinet and executed in the true one from a fresh
+  reset; per pull the cabinet's displacement, the outcome, and *false successes*: the
+  task rule applied to the outcome's facts says "opened, not dragged" while the world
+  itself (its joint and its base, read directly) says otherwise; and per part one
+  **sequence of four wrong pulls** in a row (the two confusions, twice) without reset;
+- **probes** (Push, PullV up and down, PullH out and sideways) under the true model:
+  how far each moves the part, per part kind;
+- the **twin**: every true-model opening and wrong-model pull (and one probe per part)
+  again on a planning twin of the true cabinet; agreement = the same status, the part
+  moved within 1 cm or 0.05 rad of the full robot's motion, dragged or not alike; the
+  speed-up is the ratio of the full robot's to the twin's total wall time.
+
+Results are appended per seed to ``OUT/results.jsonl`` as they finish; a rerun with the
+same ``--out`` skips the seeds already there. ``--json`` prints one JSON object (keys
+in the docstring of :func:`summary`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import multiprocessing as mp
+import os
+import statistics
+import sys
+import time
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+
+from planners.errors import ConfigError
+from strug_manip.control import (
+    ControlContext,
+    OpenDoor,
+    OpenDrawer,
+    Outcome,
+    Pick,
+    Place,
+    PlanningTwin,
+    PullH,
+    PullV,
+    Push,
+    handle_grasps,
+    place_target,
+)
+from strug_manip.domains.manipulation.rules import dragged, inside, open_enough
+from strug_manip.objects.hypotheses import BelievedJoint, believed_spec, cell_joints, model_of
+from strug_manip.world import ManipulationWorld, SceneConfig
+
+#: The two likeliest confusions of each kinematic model.
+CONFUSIONS: dict[str, tuple[str, str]] = {
+    "drawer": ("left", "right"),
+    "left": ("drawer", "right"),
+    "right": ("drawer", "left"),
+    "top": ("drawer", "bottom"),
+    "bottom": ("drawer", "top"),
+}
+#: Agreement tolerances of the twin: part motion [m] for prismatic, [rad] for revolute.
+AGREE_M, AGREE_RAD = 0.01, 0.05
+
+
+def category(model: str) -> str:
+    """``open_drawer``, ``open_door`` (side-hinged) or ``open_flap`` (top/bottom)."""
+    return {"drawer": "open_drawer", "left": "open_door", "right": "open_door"}.get(
+        model, "open_flap"
+    )
+
+
+def opening(joint: BelievedJoint, g: np.ndarray):
+    """The opening skill a belief calls for."""
+    return OpenDrawer(g, joint) if joint.type == "prismatic" else OpenDoor(g, joint)
+
+
+def world_joint(spec, link: str, model: str, T: np.ndarray) -> BelievedJoint:
+    """Model ``model`` of part ``link``'s cell as a world-frame joint."""
+    j = cell_joints(spec.part(link))[model]
+    return BelievedJoint(j.type, T[:3, :3] @ j.axis, (T @ np.r_[j.origin, 1.0])[:3])
+
+
+def run_opening(world, spec, link, joint, ctx, plan_world=None):
+    """The first grasp of the believed part that is not ``ik_infeasible``: (skill,
+    outcome)."""
+    bspec = spec if plan_world is None else plan_world.scene.cabinet_spec
+    T = world.scene.T_world_cabinet
+    out, skill = None, None
+    for g in handle_grasps(bspec.part(link), 0.0, T):
+        world.reset()
+        if plan_world is not None:
+            plan_world.reset()
+        skill = opening(joint, g)
+        out = skill.run(world, ctx=ctx, plan_world=plan_world)
+        if out.status != "ik_infeasible":
+            break
+    return skill, out
+
+
+def compare(full: Outcome, twin: Outcome, joint: str, unit: str) -> dict:
+    """The twin's agreement with the full robot on one run."""
+    tol = AGREE_M if unit == "m" else AGREE_RAD
+    dm = abs(full.motion_of(joint) - twin.motion_of(joint))
+    same_drag = dragged(full.cabinet_displacement) == dragged(twin.cabinet_displacement)
+    return {
+        "full": str(full.status),
+        "twin": str(twin.status),
+        "motion_error": round(dm, 4),
+        "agree": bool(full.status == twin.status and dm <= tol and same_drag),
+        "full_wall": full.wall_seconds,
+        "twin_wall": twin.wall_seconds,
+    }
+
+
+def evaluate_part(world, twin, spec, part, ctx) -> dict:
+    """Every measurement of one part (see the module docstring)."""
+    T = world.scene.T_world_cabinet
+    model = model_of(part)
+    joint_name = world.scene.cabinet_prefix + part.joint
+    unit = world.part_units()[joint_name]
+    rec: dict = {"part": part.link, "model": model, "category": category(model), "unit": unit}
+    # --- open under the true model, then the chain ---------------------------------
+    true = BelievedJoint.of_part(part, 0.0, T)
+    skill, out = run_opening(world, spec, part.link, true, ctx)
+    q = world.part_positions()[joint_name]
+    T_now = world.body_pose(world.scene.cabinet_prefix + world.scene.cabinet.root)
+    moved_away = dragged(out.cabinet_displacement)
+    wide = open_enough(spec, part.link, q, T_now)
+    ok = out.ok and wide and not moved_away
+    cause = (
+        "ok" if ok else str(out.status) if not out.ok else "dragged" if moved_away else "too little"
+    )
+    rec["open"] = {
+        "ok": bool(ok),
+        "cause": cause,
+        "motion": out.motion_of(joint_name),
+        "wall": out.wall_seconds,
+        "sim": out.sim_time,
+        "displacement": out.cabinet_displacement,
+    }
+    twins = []
+    twin.reset()
+    twins.append(compare(out, skill.simulate(twin), joint_name, unit))
+    if ok:
+        tgt = place_target(spec, part.link, q, T_now)
+        pick = Pick("object", tgt.grasp).run(world, ctx=ctx)
+        chain = {"pick": str(pick.status), "place": None, "ok": False}
+        if pick.ok:
+            place = Place("object", tgt.p, tgt.lift).run(world, ctx=ctx)
+            chain["place"] = str(place.status)
+            q2 = world.part_positions()[joint_name]
+            T2 = world.body_pose(world.scene.cabinet_prefix + world.scene.cabinet.root)
+            chain["ok"] = bool(
+                inside(spec, part.link, q2, T2, world.object_pose())
+                and not dragged(world.cabinet_displacement())
+                and not place.holding
+            )
+            chain["wall"] = out.wall_seconds + pick.wall_seconds + place.wall_seconds
+        rec["chain"] = chain
+    # --- wrong models --------------------------------------------------------------
+    wrong = []
+    for belief in CONFUSIONS[model]:
+        bj = world_joint(spec, part.link, belief, T)
+        bspec = believed_spec(spec, part.link, bj, T)
+        pw = ManipulationWorld.from_cabinet_spec(bspec, world.config)
+        joint = BelievedJoint.of_part(bspec.part(part.link), 0.0, T)
+        skill, out = run_opening(world, spec, part.link, joint, ctx, plan_world=pw)
+        q = world.part_positions()[joint_name]
+        T_now = world.body_pose(world.scene.cabinet_prefix + world.scene.cabinet.root)
+        said = (
+            out.ok
+            and not dragged(out.cabinet_displacement)
+            and open_enough(spec, part.link, out.part_positions[joint_name], T_now)
+        )
+        truth = not dragged(world.cabinet_displacement()) and open_enough(spec, part.link, q, T_now)
+        wrong.append(
+            {
+                "belief": belief,
+                "status": str(out.status),
+                "displacement": out.cabinet_displacement,
+                "opened": bool(said),
+                "false_success": bool(said and not truth),
+            }
+        )
+        twin.reset()
+        twins.append(compare(out, skill.simulate(twin), joint_name, unit))
+        pw.close()
+    rec["wrong"] = wrong
+    rec["sequence"] = wrong_sequence(world, spec, part, model, ctx)
+    # --- probes --------------------------------------------------------------------
+    probes = {}
+    grasps = handle_grasps(part, 0.0, T)
+    for name, make in (
+        ("push", Push),
+        ("pull_up", PullV),
+        ("pull_down", lambda g: PullV(g, True)),
+        ("pull_out", PullH),
+        ("pull_side", lambda g: PullH(g, True)),
+    ):
+        o = None
+        for g in grasps:
+            world.reset()
+            o = make(g).run(world, ctx=ctx)
+            if o.status != "ik_infeasible":
+                break
+        probes[name] = {
+            "status": str(o.status),
+            "motion": o.motion_of(joint_name),
+            "displacement": o.cabinet_displacement,
+        }
+        if name == "pull_out":
+            twin.reset()
+            twins.append(compare(o, make(g).simulate(twin), joint_name, unit))
+    rec["probes"] = probes
+    rec["twin"] = twins
+    return rec
+
+
+def wrong_sequence(world, spec, part, model: str, ctx) -> list[float]:
+    """Four wrong pulls in a row (the two confusions, twice), without reset: each
+    planned in a world of the believed cabinet standing where the real one now is, its
+    part where the real part now is; the cabinet's displacement after each [m]."""
+    world.reset()
+    joint_name = world.scene.cabinet_prefix + part.joint
+    root = world.scene.cabinet_prefix + world.scene.cabinet.root
+    out = []
+    for belief in (*CONFUSIONS[model], *CONFUSIONS[model]):
+        T = world.body_pose(root)
+        q_true = world.part_positions()[joint_name]
+        guess = world_joint(spec, part.link, belief, T)
+        # Where the part is, as this belief has it: the true position if the belief
+        # has the true joint type, else closed (another coordinate altogether).
+        q = q_true if guess.type == part.joint_type else 0.0
+        bspec = believed_spec(spec, part.link, guess, T, q)
+        pw = ManipulationWorld.from_cabinet_spec(bspec, world.config)
+        pw.copy_joints(world, [world.scene.cabinet_prefix + "free"])
+        pw.set_parts({joint_name: q})
+        joint = BelievedJoint.of_part(bspec.part(part.link), q, T)
+        try:
+            for g in handle_grasps(bspec.part(part.link), q, T):
+                o = opening(joint, g).run(world, ctx=ctx, plan_world=pw)
+                if o.status != "ik_infeasible":
+                    break
+        except ConfigError:
+            pass  # the belief leaves no travel: no pull
+        out.append(world.cabinet_displacement())
+        pw.close()
+    return out
+
+
+def evaluate_seed(seed: int) -> dict:
+    """Every part of the drawers-only and the doors-only cabinet of ``seed``."""
+    ctx = ControlContext()
+    parts = []
+    t0 = time.perf_counter()
+    for kind in ("drawer", "door"):
+        world = ManipulationWorld(SceneConfig(cabinet_seed=seed, cabinet_kinds=(kind,)))
+        spec = world.scene.cabinet_spec
+        twin = PlanningTwin(spec, world.config, ctx)
+        for part in spec.movable_parts:
+            if part.handle == "none":
+                continue
+            parts.append({"scene": kind, **evaluate_part(world, twin, spec, part, ctx)})
+        world.close()
+    return {"seed": seed, "parts": parts, "seconds": time.perf_counter() - t0}
+
+
+def rate(flags: list[bool]) -> dict:
+    """``{"n", "ok"}`` of a list of successes."""
+    return {"n": len(flags), "ok": int(sum(bool(f) for f in flags))}
+
+
+def summary(records: list[dict]) -> dict:
+    """The figures, as one JSON-able object:
+
+    - ``open_drawer``, ``open_door``, ``open_flap``: ``{"n", "ok", "causes", "median_wall_s"}``;
+    - ``wrong_model``: ``{"n", "ok"}`` (runs that did not drag the cabinet), ``"dragged"``
+      (single pulls past 0.1 m, ``{"n", "ok"}`` with ``ok`` the dragged ones),
+      ``"dragged_after_4"`` and ``"sequences"`` (sequences of four wrong pulls past
+      0.1 m in total), ``"false_success"``, ``"opened"`` (wrong models that still
+      opened the part), ``"statuses"``, ``"displacement_m"`` (percentiles 50/90/99/max);
+    - ``probes``: per part kind and probe, ``{"n", "median_motion", "moved"}``;
+    - ``chain_drawer``, ``chain_door``: ``{"n", "ok"}`` over the parts that opened;
+    - ``twin``: ``{"agreement": {"n", "ok"}, "speedup", "disagreements"}``;
+    - ``seconds``: median wall time per skill run [s] and the total.
+    """
+    parts = [p for r in records for p in r["parts"]]
+    out: dict = {}
+    for cat in ("open_drawer", "open_door", "open_flap"):
+        ps = [p for p in parts if p["category"] == cat]
+        out[cat] = {
+            **rate([p["open"]["ok"] for p in ps]),
+            "causes": dict(Counter(p["open"]["cause"] for p in ps)),
+            "median_wall_s": statistics.median([p["open"]["wall"] for p in ps]) if ps else None,
+        }
+    wrong = [w for p in parts for w in p["wrong"]]
+    disp = np.array([w["displacement"] for w in wrong]) if wrong else np.zeros(1)
+    seqs = [p["sequence"][-1] for p in parts if p.get("sequence")]
+    out["wrong_model"] = {
+        **rate([not dragged(w["displacement"]) for w in wrong]),
+        "dragged": rate([dragged(w["displacement"]) for w in wrong]),
+        "dragged_after_4": int(sum(dragged(s) for s in seqs)),
+        "sequences": len(seqs),
+        "false_success": int(sum(w["false_success"] for w in wrong)),
+        "opened": rate([w["opened"] for w in wrong]),
+        "statuses": dict(Counter(w["status"] for w in wrong)),
+        "displacement_m": {
+            k: float(np.percentile(disp, v))
+            for k, v in (("p50", 50), ("p90", 90), ("p99", 99), ("max", 100))
+        },
+        "sequence_displacement_m": {
+            "p50": float(np.median(seqs)) if seqs else None,
+            "max": float(np.max(seqs)) if seqs else None,
+        },
+    }
+    probes: dict = {}
+    for kind in ("drawer", "side door", "flap"):
+        ps = [
+            p
+            for p in parts
+            if {"open_drawer": "drawer", "open_door": "side door", "open_flap": "flap"}[
+                p["category"]
+            ]
+            == kind
+        ]
+        probes[kind] = {}
+        for name in ("push", "pull_up", "pull_down", "pull_out", "pull_side"):
+            ms = [abs(p["probes"][name]["motion"]) for p in ps]
+            probes[kind][name] = {
+                "n": len(ms),
+                "median_motion": float(np.median(ms)) if ms else None,
+                "moved": int(sum(m > 0.005 for m in ms)),
+            }
+    out["probes"] = probes
+    for name, scene in (("chain_drawer", "drawer"), ("chain_door", "door")):
+        out[name] = rate([p["chain"]["ok"] for p in parts if p["scene"] == scene and "chain" in p])
+    tw = [t for p in parts for t in p["twin"]]
+    full_wall = sum(t["full_wall"] for t in tw)
+    twin_wall = sum(t["twin_wall"] for t in tw)
+    out["twin"] = {
+        "agreement": rate([t["agree"] for t in tw]),
+        "speedup": full_wall / twin_wall if twin_wall > 0 else None,
+        "disagreements": dict(Counter(f"{t['full']} vs {t['twin']}" for t in tw if not t["agree"])),
+    }
+    walls = [p["open"]["wall"] for p in parts]
+    out["seconds"] = {
+        "median_skill_s": statistics.median(walls) if walls else None,
+        "total_s": sum(r["seconds"] for r in records),
+    }
+    return out
+
+
+def load(path: Path) -> dict[int, dict]:
+    """The records already in ``path`` (a line torn by a kill is dropped)."""
+    done: dict[int, dict] = {}
+    if path.is_file():
+        for line in path.read_text().splitlines():
+            try:
+                rec = json.loads(line)
+            except json.JSONDecodeError:
+                continue
+            done[int(rec["seed"])] = rec
+    return done
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--seeds", required=True, help="A:B, generator seeds A..B-1")
+    ap.add_argument("--json", action="store_true", help="print one JSON object")
+    ap.add_argument("--out", type=Path, default=None, help="results folder (resumable)")
+    ap.add_argument("--workers", type=int, default=1, help="processes (default 1)")
+    args = ap.parse_args(argv)
+    try:
+        a, b = (int(v) for v in args.seeds.split(":"))
+        assert 0 <= a < b
+    except (ValueError, AssertionError):
+        print(
+            f"eval_skills: error: --seeds must be A:B with 0 <= A < B, got {args.seeds!r}",
+            file=sys.stderr,
+        )
+        return 2
+    out_dir = args.out or Path(f"runs/eval_skills_{a}_{b}")
+    out_dir.mkdir(parents=True, exist_ok=True)
+    path = out_dir / "results.jsonl"
+    done = load(path)
+    todo = [s for s in range(a, b) if s not in done]
+    with path.open("a") as f:
+        if args.workers > 1 and len(todo) > 1:
+            with mp.get_context("spawn").Pool(args.workers) as pool:
+                for rec in pool.imap_unordered(evaluate_seed, todo):
+                    f.write(json.dumps(rec) + "\n")
+                    f.flush()
+                    os.fsync(f.fileno())
+                    done[rec["seed"]] = rec
+                    print(f"seed {rec['seed']} done", file=sys.stderr)
+        else:
+            for seed in todo:
+                rec = evaluate_seed(seed)
+                f.write(json.dumps(rec) + "\n")
+                f.flush()
+                os.fsync(f.fileno())
+                done[seed] = rec
+                print(f"seed {seed} done", file=sys.stderr)
+    records = [done[s] for s in range(a, b) if s in done]
+    figures = summary(records)
+    (out_dir / "summary.json").write_text(json.dumps(figures, indent=1) + "\n")
+    if args.json:
+        print(json.dumps(figures))
+    else:
+        print(json.dumps(figures, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
