@@ -17,9 +17,12 @@ the same :class:`~strug_manip.control.outcome.Outcome`:
    ``J`` the hand's Jacobian at the placement's grasp configuration;
 3. **physics**: the hand starts at the pre-grasp (the free motion of the full robot,
    collision free by construction, is not simulated), then follows the lines (their
-   Cartesian poses, on the same schedule as the arm's joint path) and grips, with the
-   same settle and grip times, the same monitors (a lost grasp, the hand held back
-   more than the tracking tolerance) and the same facts measured at the end.
+   Cartesian poses, on the same schedule as the arm's joint path; the retreat after a
+   release too: backing away can catch a handle) and grips, with the same settle and
+   grip times, the same monitors (a lost grasp, the hand held back more than the
+   tracking tolerance) and the same facts measured at the end; after its last line
+   the hand leaves the scene (the full robot stows its arm) and the cabinet and the
+   object settle for :data:`COAST_TIME`.
 
 A twin's state (:meth:`PlanningTwin.snapshot`) includes where the full robot's base is
 believed to stand (the ``robot_base`` mocap body), from which the next placement starts.
@@ -278,8 +281,6 @@ class PlanningTwin:
                 hold(p.grip_time, ph.name, False)
                 released = not ph.closed
                 continue
-            if released:  # the hand only backs away from here: the coast replaces it
-                break
             if k == 0 and ph.name == "approach":  # free space: the hand starts at its end
                 start = ph.poses[-1]
                 here = (start[:3, 3], _quats(start[None, :3, :3])[0])

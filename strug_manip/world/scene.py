@@ -295,14 +295,20 @@ def build_scene(config: SceneConfig) -> SceneModel:
         # Our cabinets' front plane is x = depth / 2; a loaded folder's is its bounds.
         front = cab_spec.depth / 2 if cab_spec is not None else float(cabinet.bounds[1, 0])
         x = config.cabinet_distance + STAND_SETBACK + front
-        pos = [x, config.cabinet_lateral, config.stand_height]
+        # Its lowest point (the glides) on the table top, so the frame the scene reports
+        # is where the cabinet rests.
+        pos = [x, config.cabinet_lateral, config.stand_height - float(cabinet.bounds[0, 2])]
         size = cabinet.bounds[1, :2] - cabinet.bounds[0, :2]
         _add_stand(
             world, config.cabinet_distance, config.cabinet_lateral, size, config.stand_height
         )
         friction = CABINET_FRICTION
     else:
-        pos = [config.cabinet_distance + cabinet.bounds[1, 0], config.cabinet_lateral, 0.0]
+        pos = [
+            config.cabinet_distance + cabinet.bounds[1, 0],
+            config.cabinet_lateral,
+            -float(cabinet.bounds[0, 2]),
+        ]
         friction = None
     add_to_spec(spec, cabinet, pos, yaw, free=True, prefix="cabinet/", base_friction=friction)
     eye = (-0.9, 1.5, 1.8)
