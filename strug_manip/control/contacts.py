@@ -7,7 +7,9 @@ the Cartesian lines of every skill and the base placement search (:mod:`.placeme
 all use it.
 
 - *Robot bodies* are the subtree of the robot's root body; a contact counts if one of
-  its two bodies is a robot body and the pair is not allowed.
+  its two bodies is a robot body and the pair is not allowed. Self-contacts count too:
+  where the simulation leaves them out (the scene's ``ROBOT_CONTYPE``), the checker
+  works on a copy of the model with them on.
 - *Allowed pairs* are body ids, e.g. the fingers with the handle they are about to grasp
   (:meth:`ContactChecker.allow`).
 - An *attached* body (a held object) follows the gripper: before each check its free
@@ -19,6 +21,7 @@ all use it.
 
 from __future__ import annotations
 
+import copy
 import itertools
 import math
 from collections.abc import Iterable, Sequence
@@ -75,6 +78,12 @@ class ContactChecker:
             else self.body_id(robot_root)
         )
         self.robot = np.array([b != 0 and int(m.body_rootid[b]) == root for b in range(m.nbody)])
+        robot_geoms = self.robot[np.asarray(m.geom_bodyid)] & (np.asarray(m.geom_contype) != 0)
+        if np.any((m.geom_conaffinity & m.geom_contype)[robot_geoms] == 0):
+            # The simulation leaves the robot's self-contacts out (world.scene's
+            # ROBOT_CONTYPE); the checks need them: a copy of the model with them on.
+            m = self.model = copy.copy(model)
+            m.geom_conaffinity[robot_geoms] |= m.geom_contype[robot_geoms]
         self.geom_body = np.asarray(m.geom_bodyid).copy()
         self.hand = np.array([self.body_id(b) for b in HAND_BODIES])
         self.data = mujoco.MjData(m)
@@ -107,6 +116,21 @@ class ContactChecker:
             if jid < 0:
                 raise UnknownNameError("joint", name, [m.joint(j).name for j in range(m.njnt)])
             self.data.qpos[m.jnt_qposadr[jid]] = v
+        return self
+
+    def set_pose(self, body: str, T_world_body: np.ndarray) -> ContactChecker:
+        """Put the free body ``body`` (e.g. the object) at ``T_world_body`` (4, 4) in the
+        scratch data."""
+        m = self.model
+        jnt = int(m.body_jntadr[self.body_id(body)])
+        if jnt < 0 or int(m.jnt_type[jnt]) != int(mujoco.mjtJoint.mjJNT_FREE):
+            raise ConfigError(f"only a body on a free joint can be placed, got {body!r}")
+        adr = int(m.jnt_qposadr[jnt])
+        T = np.asarray(T_world_body, dtype=float)
+        self.data.qpos[adr : adr + 3] = T[:3, 3]
+        mujoco.mju_mat2Quat(
+            self.data.qpos[adr + 3 : adr + 7], np.ascontiguousarray(T[:3, :3]).reshape(9)
+        )
         return self
 
     def get(self, joint: str) -> float:

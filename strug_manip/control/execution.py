@@ -17,8 +17,10 @@ MuJoCo physics stepping all along (:class:`~strug_manip.control.driver.JointDriv
    line), each grip closed or opened; while a line runs, a lost grasp (fingers closed
    on nothing) or the gripper more than ``tracking_tolerance`` behind its commanded
    pose (the arm is blocked) stops the run;
-5. **stow**: back to the tuck (OMPL; holding the object: to its carry posture), so
-   the next skill may drive and the head camera sees the cabinet past the arm.
+5. **stow**: back to the tuck (holding the object: to its carry posture), so the next
+   skill may drive and the head camera sees the cabinet past the arm; planned with the
+   rest before anything moves (:func:`plan_stow`: from where the last line ends, the
+   believed parts where the lines took them).
 
 Collision checks and plans use ``plan_world`` (the believed cabinet; default the world
 itself), into which the robot's and the object's state is copied by joint name before
@@ -71,17 +73,118 @@ class FreeMotion:
         route: base poses to drive through, or None (the base stays).
         torso: the torso height to rise to while driving [m], or None.
         reach: torso + arm waypoints to the pre-grasp (N, 8).
+        after: torso + arm waypoints from the end of the last line to the drive
+            posture (:func:`plan_stow`), (N, 8).
     """
 
     stow: np.ndarray | None
     route: list[np.ndarray] | None
     torso: float | None
     reach: np.ndarray
+    after: np.ndarray
 
 
 def wrap_to(yaw: float, near: float) -> float:
     """``yaw`` [rad] plus the multiple of 2 pi that brings it closest to ``near``."""
     return near + (yaw - near + np.pi) % (2 * np.pi) - np.pi
+
+
+def ends_holding(plan: SkillPlan) -> bool:
+    """The plan ends with the fingers closed on something (a Pick)."""
+    closed = plan.carrying is not None
+    for ph in plan.phases:
+        if isinstance(ph, Grip):
+            closed = ph.closed
+    return closed
+
+
+def plan_stow(
+    ctx: ControlContext,
+    plan_world: ManipulationWorld,
+    placement: Placement,
+    params: SkillParams,
+    seed: int,
+) -> np.ndarray:
+    """Torso + arm waypoints (N, 8) from where ``placement``'s last line ends to the
+    drive posture (the tuck, or holding the object its carry posture), planned in
+    ``plan_world`` with the base where that line ends, every believed part moved where
+    the plan's lines took it and a held object attached as grasped; () for no motion.
+    The full robot plans it before it moves; the planning twin plans the same one and
+    its hand follows it out of the cabinet's way.
+
+    Raises:
+        SkillStop: ``no_motion_plan``.
+    """
+    plan = placement.plan
+    base, q_end = placement.start_of(len(placement.lines))
+    carrying = None
+    if ends_holding(plan):
+        if plan.carrying is not None:
+            carrying = plan.carrying
+        else:  # a Pick: the object as the plan grasps it (where the line to the
+            # closing grip ends)
+            grip, last = None, None
+            for ph in plan.phases:
+                if isinstance(ph, Grip) and ph.closed and last is not None:
+                    grip = last.poses[-1]
+                elif isinstance(ph, Line):
+                    last = ph
+            grip = plan.pre if grip is None else grip
+            carrying = ("object", np.linalg.inv(grip) @ plan_world.object_pose())
+    goal = np.array(TUCK if carrying is None else CARRY[held_grasp(carrying[1])])
+    checker = ctx.checker(plan_world.model).load(plan_world.data)
+    if plan.carrying is not None and carrying is None:  # a Place: the object left there
+        checker.set_pose(plan.carrying[0], _release_pose(plan) @ plan.carrying[1])
+    for line in plan.lines:
+        if line.part_joint is not None and line.part_q is not None:
+            checker.set({line.part_joint: float(line.part_q[-1])})
+    checker.attach(*carrying) if carrying is not None else checker.attach(None)
+    checker.allow()
+    if np.max(np.abs(q_end[1:] - goal[1:])) < TUCKED_TOLERANCE:
+        return np.zeros((0, len(goal)))
+    validity = ArmValidity(checker, base)
+    # From where the lines end; failing that (an arm deep in a low drawer is a narrow
+    # passage for the samplers), back to the pre-grasp configuration first (a straight
+    # joint-space line, if free: the hand goes back the way it came) and from there.
+    starts = [(q_end, np.zeros((0, len(goal))))]
+    q_pre = placement.q_pre
+    if np.any(q_pre != q_end):
+        starts.append((q_pre, q_pre[None]))
+    res = None
+    for start, prefix in starts:
+        if len(prefix) and checker.segment(np.r_[base, q_end], np.r_[base, start]):
+            continue
+        for planner in ctx.planners(plan_world.model):
+            res = planner.plan(
+                dict(zip(ARM_TORSO_JOINTS, start.tolist(), strict=True)),
+                dict(zip(ARM_TORSO_JOINTS, goal.tolist(), strict=True)),
+                validity,
+                timeout=params.plan_timeout,
+                seed=seed,
+            )
+            if res.success or res.reason != NO_PLAN:
+                break
+        if res.success:
+            return np.vstack([prefix, np.asarray(res.waypoints[1:])])
+    assert res is not None
+    raise SkillStop(Status.NO_MOTION_PLAN, f"{res.reason}: {res.detail}", "stow")
+
+
+def _release_pose(plan: SkillPlan) -> np.ndarray:
+    """``T_world_gripper`` (4, 4) where ``plan`` opens its fingers (the end of the line
+    before the opening grip)."""
+    last = None
+    for ph in plan.phases:
+        if isinstance(ph, Grip) and not ph.closed:
+            break
+        if isinstance(ph, Line):
+            last = ph
+    return plan.pre if last is None else last.poses[-1]
+
+
+#: Seed offset of the stow's plan (independent of how many plans came before it, so
+#: that the planning twin plans the same one).
+STOW_SEED = 7919
 
 
 class FullRobot:
@@ -144,7 +247,9 @@ class FullRobot:
                     k += 1
                 self._key(p.name)
             phase = "stow"
-            self._stow(holding=self._holding())
+            if len(free.after):
+                self.drv.follow(list(free.after), 0.3, monitor=self._line_monitor(None))
+                self.drv.hold(self.params.settle_time)
             self._key("end")
         except SkillStop as stop:
             return self._outcome(
@@ -195,6 +300,7 @@ class FullRobot:
         q_to: np.ndarray,
         carrying: tuple[str, np.ndarray] | None,
         base: np.ndarray | None = None,
+        phase: str = "",
     ) -> np.ndarray:
         """OMPL waypoints (N, 8) from ``q_from`` to ``q_to`` (excluded the start) with
         the base at ``base`` (default: where it is)."""
@@ -214,7 +320,7 @@ class FullRobot:
                 break
         self.plan_seconds += time.perf_counter() - t
         if not plan.success:
-            raise SkillStop(Status.NO_MOTION_PLAN, f"{plan.reason}: {plan.detail}")
+            raise SkillStop(Status.NO_MOTION_PLAN, f"{plan.reason}: {plan.detail}", phase)
         return plan.waypoints[1:]
 
     def _route(self, target: np.ndarray, arm: np.ndarray, carrying) -> list[np.ndarray]:
@@ -246,24 +352,28 @@ class FullRobot:
         """The first placement (best first) whose free motions plan: the stow (if the
         base must move and the arm is not in its drive posture), the base's route, the
         reach to the pre-grasp. Everything is planned before anything moves."""
-        last: SkillStop | None = None
+        first: SkillStop | None = None
         for placement in self._placements(plan):
             try:
                 return placement, self._free_plan(placement)
             except SkillStop as stop:
-                last = stop
-        assert last is not None
-        raise last
+                first = first or stop
+        assert first is not None
+        raise first  # the best placement's reason
 
     def _free_plan(self, placement: Placement) -> FreeMotion:
         carrying = placement.plan.carrying
         q_pre = placement.q_pre
         far = np.max(np.abs(placement.base[:2] - self.drv.base[:2])) > self.params.drive_tolerance
         turn = abs(wrap_to(placement.base[2], self.drv.base[2]) - self.drv.base[2]) > 0.02
+        after = self._plan_after(placement)
         if not (far or turn):
-            return FreeMotion(None, None, None, self._plan_arm(self.drv.q, q_pre, carrying))
+            reach = self._plan_arm(self.drv.q, q_pre, carrying, phase="reach")
+            return FreeMotion(None, None, None, reach, after)
         drive_q = self._drive_posture(carrying)
-        stow = None if self._near(drive_q) else self._plan_arm(self.drv.q, drive_q, carrying)
+        stow = None
+        if not self._near(drive_q):
+            stow = self._plan_arm(self.drv.q, drive_q, carrying, phase="stow before driving")
         start = drive_q if stow is not None else self.drv.q
         route = self._route(placement.base, start, carrying)
         torso = None
@@ -271,8 +381,16 @@ class FullRobot:
             torso = float(q_pre[0])
             start = start.copy()
             start[0] = torso
-        reach = self._plan_arm(start, q_pre, carrying, base=placement.base)
-        return FreeMotion(stow, route, torso, reach)
+        reach = self._plan_arm(start, q_pre, carrying, base=placement.base, phase="reach")
+        return FreeMotion(stow, route, torso, reach, after)
+
+    def _plan_after(self, placement: Placement) -> np.ndarray:
+        """The stow after the skill (:func:`plan_stow`), planned before anything moves."""
+        t = time.perf_counter()
+        try:
+            return plan_stow(self.ctx, self._sync(), placement, self.params, self.seed + STOW_SEED)
+        finally:
+            self.plan_seconds += time.perf_counter() - t
 
     def _free_motion(self, free: FreeMotion) -> None:
         """Execute a planned free motion (stow, drive, reach)."""
@@ -289,21 +407,6 @@ class FullRobot:
         carry posture."""
         return np.array(TUCK if carrying is None else CARRY[held_grasp(carrying[1])])
 
-    def _stow(self, holding: bool) -> None:
-        """Back to the tuck (OMPL); holding the object, to the carry posture of its grasp,
-        so the robot may drive and its head camera sees past the arm."""
-        carrying = self._carried() if holding else None
-        goal = self._drive_posture(carrying)
-        if self._near(goal):
-            return
-        self.drv.follow(list(self._plan_arm(self.drv.q, goal, carrying)), 0.3)
-        self.drv.hold(self.params.settle_time)
-
-    def _carried(self) -> tuple[str, np.ndarray]:
-        """The held object and ``T_gripper_object`` now."""
-        T_wg = self.world.site_pose(GRIPPER_SITE)
-        return "object", np.linalg.inv(T_wg) @ self.world.object_pose()
-
     def _line(self, line: Line, placement: Placement, k: int) -> None:
         """Follow line ``k`` of the placement, monitoring the grasp and the tracking."""
         seconds = max(0.3, line.length / line.speed)
@@ -312,11 +415,11 @@ class FullRobot:
         self.drv.follow(list(placement.lines[k]), seconds, base_path=base_path, monitor=mon)
         self.drv.hold(self.params.settle_time)
         mon(0.0)
-        if self.plan_world is not self.world and line.part_joint is not None:
-            # The believed part is where the line took it: the next plans (the retreat
-            # is planned, the stow) see it there, as the robot believes it.
-            if line.part_q is not None:
-                self.plan_world.set_parts({line.part_joint: float(line.part_q[-1])})
+        moved = line.part_joint is not None and line.part_q is not None
+        if moved and self.plan_world is not self.world:
+            # The believed part is where the line took it (the next skill plans with it
+            # there, as the robot believes it).
+            self.plan_world.set_parts({line.part_joint: float(line.part_q[-1])})
 
     def _line_monitor(self, line: Line | None) -> Callable[[float], None]:
         """Stops a motion when the grasp of ``line`` is lost (if it holds something) or

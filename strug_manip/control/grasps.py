@@ -14,7 +14,10 @@ turned half a turn).
 down by :data:`PITCHES` (the approach tilted downward: the wrist above the handle, so
 the forearm clears low fronts and table edges), then pitched up. Each is a full
 ``T_world_gripper``; a caller (the manipulation domain's grasp sampler, an evaluation)
-tries them in order.
+tries them in order. Where the open finger pads would reach the part's front before the
+TCP is at the grasp point (a short knob, a steep pitch), the grasp backs off along the
+front's normal until they clear it by :data:`FACE_CLEARANCE`; a grasp that would need
+to back off so far that the handle leaves the pads is not offered.
 
 Frames: ``T_world_object`` is the cabinet's frame (its +x the front's outward normal).
 """
@@ -28,6 +31,18 @@ from strug_manip.objects.generator import PartSpec, axis_angle
 #: Pitch angles of the candidate grasps after the level one [rad] (positive: the
 #: approach tilted down).
 PITCHES: tuple[float, ...] = (0.35, 0.7, -0.35)
+#: Corners of the open finger pads relative to the TCP, gripper frame [m] (fetch.xml:
+#: pads 0.077 x 0.014 x 0.027 centred 0.02 behind the TCP, their inner faces 0.051
+#: from the centre line with the fingers open).
+PAD_CORNERS = np.array(
+    [(x, sy * y, sz * 0.0135) for x in (0.0185, -0.0585) for y in (0.0509, 0.0649)
+     for sy in (1.0, -1.0) for sz in (1.0, -1.0)]
+)  # fmt: skip
+#: Gap kept between the pads and the part's front at the grasp [m].
+FACE_CLEARANCE = 0.003
+#: The handle must stay this far inside the pads' tips when a grasp backs the TCP off
+#: the front to keep the pads clear of it [m] (else that grasp is dropped).
+MIN_OVERLAP = 0.008
 
 
 def grasp_rotation(approach: np.ndarray, bar_axis: np.ndarray | None) -> np.ndarray:
@@ -91,15 +106,34 @@ def handle_grasps(
             bars = [edge, np.cross(normal, edge)]
         else:
             bars = [None, side]
+    depth = float(part.handle_pos[0] - front_of_handle(part))  # TCP in front of the face
     out = []
     for b in bars:
         for pitch in (0.0, *PITCHES):
             approach = axis_angle(side, -pitch) @ -normal  # +pitch: tilted down
             g = np.eye(4)
             g[:3, :3] = grasp_rotation(approach, b)
-            g[:3, 3] = point
+            # The pads' deepest point toward the face, as far in front of the TCP.
+            reach = float(np.max(PAD_CORNERS @ (g[:3, :3].T @ -normal)))
+            back = max(0.0, reach + FACE_CLEARANCE - depth)
+            if back > PAD_CORNERS[0, 0] - MIN_OVERLAP:
+                continue  # the pads would hit the front before they straddle the handle
+            g[:3, 3] = point + back * normal
             out.append(g)
     return out
+
+
+def front_of_handle(part: PartSpec) -> float:
+    """The x of the front face the handle stands on (object frame, part closed) [m]:
+    where its knob or posts start."""
+    xs = [
+        part.origin[0] + g.pos[0] - 0.5 * g.size[1]  # geoms are in the link frame
+        for g in part.geoms
+        if g.name.startswith(("handle_knob", "handle_post")) and g.shape == "cylinder"
+    ]
+    if not xs:
+        raise ValueError(f"part {part.link!r} has no knob or bar posts")
+    return float(min(xs))
 
 
 def held_grasp(T_gripper_object: np.ndarray) -> str:

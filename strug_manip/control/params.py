@@ -49,6 +49,10 @@ class SkillParams:
             move a free part visibly (a 4 cm shift shows in the head camera's point
             cloud), little enough that a wrong direction seldom drags the cabinet.
         retreat_distance: how far the gripper backs off after releasing [m].
+        withdraw_distance: then how far the hand moves level away from the cabinet
+            front (against the grasp's original approach) before the arm folds [m]:
+            the stow then starts clear of a part that a wrong belief left sticking out
+            where the robot thinks the space is free (else the folding arm sweeps it).
         lift_height: how high Pick lifts the object [m].
         place_clearance: height from which Place lowers an object held from above [m]
             (clears a drawer's walls).
@@ -82,6 +86,7 @@ class SkillParams:
     limit_margin_rad: float = 0.05
     probe_distance: float = 0.04
     retreat_distance: float = 0.08
+    withdraw_distance: float = 0.12
     lift_height: float = 0.12
     place_clearance: float = 0.12
     insert_clearance: float = 0.2

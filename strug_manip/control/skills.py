@@ -25,6 +25,10 @@ skill              phases after the free motion to ``pre`` (``g`` the grasp pose
                    (side grasp), release ``place_drop`` above ``p``, retreat
 =================  ==========================================================================
 
+After its retreat, a skill that moved a part by its handle also *withdraws* the hand
+level away from the cabinet front (``withdraw_distance``), so the arm folds clear of
+whatever a wrong belief left sticking out.
+
 Openings follow whatever joint they are given (:class:`~strug_manip.objects.hypotheses.
 BelievedJoint`): ``OpenDrawer`` with a revolute belief swings, ``OpenDoor`` with a
 prismatic one pulls straight; the two differ in their default amount. An opening stops
@@ -108,14 +112,23 @@ class Skill:
         robot = FullRobot(world, ctx, params, plan_world=pw, seed=seed, observer=observer)
         return robot.run(plan)
 
-    def simulate(self, twin: object, params: SkillParams = DEFAULT_PARAMS) -> Outcome:
-        """Execute on a planning twin (:class:`~strug_manip.control.twin.PlanningTwin`),
-        whose cabinet is both believed and simulated."""
+    def simulate(
+        self,
+        twin: object,
+        params: SkillParams = DEFAULT_PARAMS,
+        plan_world: ManipulationWorld | None = None,
+    ) -> Outcome:
+        """Execute on a planning twin (:class:`~strug_manip.control.twin.PlanningTwin`):
+        physics in the twin's cabinet, the plan made against ``plan_world`` (the world
+        the robot believes in, as for :meth:`run`; default: the twin's own cabinet)."""
         from strug_manip.control.twin import PlanningTwin
 
         if not isinstance(twin, PlanningTwin):
             raise ConfigError(f"twin must be a PlanningTwin, got {twin!r}")
-        return twin.run(self.plan(twin.world, params))
+        if plan_world is not None and not isinstance(plan_world, ManipulationWorld):
+            raise ConfigError(f"plan_world must be a ManipulationWorld or None, got {plan_world!r}")
+        pw = twin.world if plan_world is None else plan_world
+        return twin.run(self.plan(pw, params), plan_world)
 
 
 # --- helpers --------------------------------------------------------------------------
@@ -191,8 +204,9 @@ def _grasp_and_move(
     part_q: np.ndarray | None,
     p: SkillParams,
 ) -> SkillPlan:
-    """Approach g, grasp, move along ``poses``, release, retreat: the plan of every
-    skill that moves a part by its handle."""
+    """Approach g, grasp, move along ``poses``, release, retreat, withdraw (level, away
+    from the front, for a grasp that is not from above): the plan of every skill that
+    moves a part by its handle."""
     link, joint, _ = part_at(world, g)
     body = world.scene.cabinet_prefix + link
     pre, approach = _approach(g, body, p)
@@ -206,6 +220,16 @@ def _grasp_and_move(
         part_q=None if q_end is None else np.repeat(q_end, len(back[0])),
     )  # fmt: skip
     phases = (approach, Grip(True), moving, Grip(False), retreat)
+    away = -g[:3, 0].copy()
+    away[2] = 0.0
+    if np.linalg.norm(away) > 0.3:  # a level-ish grasp: back away from the front
+        start = retreat.poses[-1]
+        steps = straight(start, p.withdraw_distance * away / np.linalg.norm(away), p.line_step)
+        withdraw = line_of(
+            "withdraw", steps, p.approach_speed, part_joint=joint,
+            part_q=None if q_end is None else np.repeat(q_end, len(steps[0])),
+        )  # fmt: skip
+        phases = (*phases, withdraw)
     return SkillPlan(skill, pre, phases, part=link)
 
 
@@ -350,8 +374,9 @@ def object_grasp(T_world_object: np.ndarray, grasp: str, toward: np.ndarray) -> 
 
     ``top``: the approach straight down, the fingers across the box's y side (0.06 m),
     the TCP 1 cm above its centre. ``side``: level, along the box's x axis (the sign
-    that points away from ``toward`` (2,), where the robot is), the fingers across its
-    y side, the TCP at its centre.
+    that points toward ``toward`` (2,): the middle of the table it stands on, so the
+    hand comes in from beside the table, not across it), the fingers across its y
+    side, the TCP at its centre.
     """
     T = np.eye(4)
     y = T_world_object[:3, 1].copy()
@@ -364,7 +389,7 @@ def object_grasp(T_world_object: np.ndarray, grasp: str, toward: np.ndarray) -> 
         x = T_world_object[:3, 0].copy()
         x[2] = 0.0
         x /= np.linalg.norm(x)
-        if x[:2] @ (T_world_object[:2, 3] - toward) < 0:
+        if x[:2] @ (np.asarray(toward, dtype=float) - T_world_object[:2, 3]) < 0:
             x = -x
         T[:3, 3] = T_world_object[:3, 3]
     T[:3, :3] = np.column_stack([x, y, np.cross(x, y)])
@@ -388,8 +413,7 @@ class Pick(Skill):
         _check_object(self.o)
         if self.grasp not in GRASPS:
             raise UnknownNameError("grasp", self.grasp, GRASPS)
-        base = np.array([world.robot_qpos()[j] for j in ("base_x_joint", "base_y_joint")])
-        g = object_grasp(world.object_pose(), self.grasp, base)
+        g = object_grasp(world.object_pose(), self.grasp, np.array(world.config.table_xy))
         touch = frozenset({self.o})
         pre = g.copy()
         pre[:3, 3] -= params.pick_offset * g[:3, 0]

@@ -6,11 +6,13 @@ the same :class:`~strug_manip.control.plan.SkillPlan` in a world of the same cab
 with the Fetch's floating hand (:mod:`strug_manip.world.floating_gripper`) and returns
 the same :class:`~strug_manip.control.outcome.Outcome`:
 
-1. **reachability**: the full robot's base placement search, run kinematically (the
-   IK of the pre-grasp and every line, no collision checks; cached per plan and base
-   pose, so it is shared by every particle): no placement is ``ik_infeasible``, as for
-   the full robot; a placement gives each line's joint path, hence its duration under
-   the one timing law (:mod:`.timing`), the same as the full robot's;
+1. **reachability**: the full robot's base placement search (the IK of the pre-grasp
+   and every line, the Fetch's collisions checked in a world of the twin's cabinet as
+   it is now; cached per twin, plan, base pose and scene state, so a search that
+   simulates a skill again on a particle pays it once): no placement is
+   ``ik_infeasible``, as for the full robot; a placement gives each line's joint path,
+   hence its duration under the one timing law (:mod:`.timing`), the same as the full
+   robot's;
 2. **strength**: the hand's servos get the force and torque the Fetch's joints can
    exert at the grasp: along each world axis ``min_j tau_j / |J_j|`` over the torso
    and arm joints (and the base's on whole-body lines), ``tau`` their effort limits and
@@ -20,9 +22,10 @@ the same :class:`~strug_manip.control.outcome.Outcome`:
    Cartesian poses, on the same schedule as the arm's joint path; the retreat after a
    release too: backing away can catch a handle) and grips, with the same settle and
    grip times, the same monitors (a lost grasp, the hand held back more than the
-   tracking tolerance) and the same facts measured at the end; after its last line
-   the hand leaves the scene (the full robot stows its arm) and the cabinet and the
-   object settle for :data:`COAST_TIME`.
+   tracking tolerance) and the same facts measured at the end; then the hand follows
+   the full robot's stow (the same plan, :func:`~strug_manip.control.execution.
+   plan_stow`) until it is clear of the cabinet, leaves the scene, and the cabinet and
+   the object settle for :data:`COAST_TIME`.
 
 A twin's state (:meth:`PlanningTwin.snapshot`) includes where the full robot's base is
 believed to stand (the ``robot_base`` mocap body), from which the next placement starts.
@@ -42,6 +45,7 @@ from planners.errors import ConfigError
 from strug_manip.control import timing
 from strug_manip.control.contacts import HAND_BODIES
 from strug_manip.control.context import ControlContext
+from strug_manip.control.execution import STOW_SEED, ends_holding, plan_stow
 from strug_manip.control.grasps import held_grasp
 from strug_manip.control.outcome import Outcome, SkillStop, Status
 from strug_manip.control.params import DEFAULT_PARAMS, SkillParams
@@ -72,6 +76,13 @@ TIMESTEP = 0.004
 #: After its last release the hand leaves the scene (its geoms stop colliding: the full
 #: robot backs away and stows) and the cabinet and object settle for this long [s].
 COAST_TIME = 0.3
+#: The hand follows the full robot's stow until it is this far from the cabinet's box
+#: for good [m] (the fingers reach 0.1 m past the TCP; the arm's links, which the twin
+#: does not have, seldom sweep the cabinet where the hand does not).
+STOW_CLEARANCE = 0.15
+#: Room in front of the cabinet that its open parts take (a drawer pulled out, a door
+#: swung open) [m].
+FRONT_ROOM = 0.35
 #: Where the TCP (the ``gripper`` site) is in the hand's frame [m] (fetch.xml).
 TCP_OFFSET = 0.02
 #: Bounds of the hand's force [N] and torque [N m] limits: at least what a wrist can
@@ -91,6 +102,10 @@ class PlanningTwin:
             time step are replaced by ``spec``, the floating hand and :data:`TIMESTEP`.
         ctx: shared IK solvers and the placement cache (default: a new context).
         params: the skills' constants (default :data:`DEFAULT_PARAMS`).
+        checked: the placement search checks the Fetch's collisions as the full robot's
+            does (in a world of the same cabinet with the Fetch, built on first use),
+            so the twin predicts the same placement and ``ik_infeasible``; False:
+            kinematic only (faster on a cold cache, less faithful).
     """
 
     def __init__(
@@ -99,6 +114,7 @@ class PlanningTwin:
         config: SceneConfig | None = None,
         ctx: ControlContext | None = None,
         params: SkillParams = DEFAULT_PARAMS,
+        checked: bool = True,
     ) -> None:
         if not isinstance(spec, CabinetSpec):
             raise ConfigError(f"spec must be a CabinetSpec, got {spec!r}")
@@ -107,8 +123,13 @@ class PlanningTwin:
             base, cabinet_spec=spec, cabinet_folder=None, robot="gripper", timestep=TIMESTEP
         )
         self.world = ManipulationWorld(cfg)
+        self._robot_config = dataclasses.replace(
+            base, cabinet_spec=spec, cabinet_folder=None, robot="fetch"
+        )
         self.ctx = ctx or ControlContext()
         self.params = params
+        self.checked = bool(checked)
+        self._planning_world: ManipulationWorld | None = None
         m = self.world.model
         self._slide_adr = np.array([m.jnt_qposadr[m.joint(j).id] for j in SLIDES])
         self._slide_dof = np.array([m.jnt_dofadr[m.joint(j).id] for j in SLIDES])
@@ -131,6 +152,8 @@ class PlanningTwin:
         self._obj_body = m.body("object").id
         self._obj_geom = m.geom("object").id
         self._obj_collide = _collide(m, self._obj_geom)
+        # The cabinet's joints (its own planning world follows them).
+        self._cabinet_joints = [*self.world.part_joints, self.world.scene.cabinet_prefix + "free"]
         self.reset()
 
     # -- state -------------------------------------------------------------------------
@@ -167,21 +190,54 @@ class PlanningTwin:
         self.world.restore(state)
 
     # -- the run -----------------------------------------------------------------------
-    def run(self, plan: SkillPlan) -> Outcome:
-        """Simulate ``plan`` (see the module docstring); never raises for a failure of
-        the skill."""
-        return run_batch([self], plan)[0]
+    def run(self, plan: SkillPlan, plan_world: ManipulationWorld | None = None) -> Outcome:
+        """Simulate ``plan`` (see the module docstring), made against ``plan_world`` (the
+        world the robot believes in, whose cabinet the placement's collision checks
+        see; default: this twin's own cabinet); never raises for a failure of the
+        skill."""
+        return run_batch([self], plan, plan_world)[0]
 
-    def _placement(self, plan: SkillPlan) -> Placement:
+    def _placement(self, plan: SkillPlan, plan_world: ManipulationWorld | None) -> Placement:
         base = self.robot_base
         reach = np.array(TUCK if plan.carrying is None else CARRY[held_grasp(plan.carrying[1])])
+        pw = self._planning(plan_world)
+        # What the collision checks see: the believed world's cabinet and the twin's
+        # object (to the millimetre).
+        state = b""
+        if pw is not None:
+            state = np.round(pw.data.qpos[pw.cabinet_qpos_indices()], 3).tobytes()
+        obj = np.round(self.world.data.qpos[self._obj_adr : self._obj_adr + 7], 3).tobytes()
         return self.ctx.placement(
-            ("twin", plan.key, base.round(4).tobytes()),
+            ("twin", id(pw), plan.key, base.round(4).tobytes(), state, obj),
             lambda: find_placement(
                 plan, self.ctx.ik, self.ctx.wb_ik, base, (np.array(TUCK), reach),
-                (self.vmax, _BASE_SPEED),
+                (self.vmax, _BASE_SPEED), self._checker(plan, base, pw),
             ),
         )  # fmt: skip
+
+    def _planning(self, plan_world: ManipulationWorld | None) -> ManipulationWorld | None:
+        """The world of the placement's collision checks: ``plan_world``, else a world of
+        the twin's own cabinet with the Fetch (built on first use) in the twin's cabinet
+        state; None for a kinematic-only twin."""
+        if not self.checked:
+            return None
+        if plan_world is not None:
+            return plan_world
+        if self._planning_world is None:
+            self._planning_world = ManipulationWorld(self._robot_config)
+        self._planning_world.copy_joints(self.world, self._cabinet_joints)
+        return self._planning_world
+
+    def _checker(self, plan: SkillPlan, base: np.ndarray, pw: ManipulationWorld | None):
+        """The full robot's contact checker in ``pw`` with the twin's object, the base at
+        ``base``; None without a planning world."""
+        if pw is None:
+            return None
+        pw.copy_joints(self.world, ["object/free"])
+        checker = self.ctx.checker(pw.model).load(pw.data)
+        checker.set(dict(zip(BASE_JOINTS, base.tolist(), strict=True)))
+        checker.attach(*plan.carrying) if plan.carrying is not None else checker.attach(None)
+        return checker.allow()
 
     def _start(self, prog: Program) -> None:
         """The hand where the program starts, at rest, with the strength of the arm
@@ -246,10 +302,10 @@ class PlanningTwin:
         m.actuator_forcerange[self._rot_act] = [0.0, torque]
 
     # -- the program ------------------------------------------------------------------
-    def program(self, plan: SkillPlan) -> Program:
-        """The controls that run ``plan`` on the twin, from its placement (raises
-        :class:`SkillStop` ``ik_infeasible`` if there is none)."""
-        placement = self._placement(plan)
+    def program(self, plan: SkillPlan, plan_world: ManipulationWorld | None = None) -> Program:
+        """The controls that run ``plan`` (made against ``plan_world``) on the twin, from
+        its placement (raises :class:`SkillStop` ``ik_infeasible`` if there is none)."""
+        placement = self._placement(plan, plan_world)
         plan = placement.plan
         dt = self.world.model.opt.timestep
         p = self.params
@@ -275,6 +331,7 @@ class PlanningTwin:
 
         k = 0
         released = False
+        stow = self._stow_commands(placement, plan_world)
         for ph in plan.phases:
             if isinstance(ph, Grip):
                 grip = GRIPPER_SQUEEZE if ph.closed else GRIPPER_OPEN
@@ -291,10 +348,63 @@ class PlanningTwin:
             here = (ps[-1], qs[-1])
             hold(p.settle_time, ph.name, ph.holding)
             k += 1
+        if stow is not None and len(stow[0]):  # the hand follows the stow out of the way
+            add(stow[0], stow[1], "stow", False, ends_holding(plan))
+            here = (stow[0][-1], stow[1][-1])
         cat = np.concatenate
         coast = max(1, round(COAST_TIME / dt)) if released else 0
         return Program(plan, placement, cat(pos), cat(quat), cat(grips), cat(names), cat(held),
                        cat(holds), start, coast)  # fmt: skip
+
+    def _stow_commands(
+        self, placement: Placement, plan_world: ManipulationWorld | None
+    ) -> tuple[np.ndarray, np.ndarray] | None:
+        """The TCP positions (n, 3) and orientations (n, 4) every step of the full
+        robot's stow after ``placement`` (:func:`~strug_manip.control.execution.
+        plan_stow`, the same plan), up to where the hand is clear of the cabinet for
+        good (:data:`STOW_CLEARANCE`); None without a planning world (a kinematic-only
+        twin) or when the stow finds no plan (the full robot would stop there, with the
+        skill's motions done)."""
+        pw = self._planning(plan_world)
+        if pw is None:
+            return None
+        key = ("twin stow", id(pw), id(placement))
+        try:
+            return self.ctx.memo(key, lambda: self._stow_path(placement, pw))  # type: ignore[return-value]
+        except SkillStop:
+            return None
+
+    def _stow_path(
+        self, placement: Placement, pw: ManipulationWorld
+    ) -> tuple[np.ndarray, np.ndarray]:
+        stow = plan_stow(self.ctx, pw, placement, self.params, STOW_SEED)
+        dt = self.world.model.opt.timestep
+        base, q_end = placement.start_of(len(placement.lines))
+        if not len(stow):
+            return np.zeros((0, 3)), np.zeros((0, 4))
+        pts = timing.polyline(q_end, list(stow))
+        T = timing.duration(pts, self.vmax, 0.3)
+        qs = timing.samples(pts, T, dt, self.vmax)
+        fixed = dict(zip(BASE_JOINTS, base.tolist(), strict=True))
+        poses = np.array(
+            [self.ctx.ik.forward({**fixed, **dict(zip(ARM_TORSO_JOINTS, q.tolist(), strict=True))})
+             for q in qs]
+        )  # fmt: skip
+        near = self._near_cabinet(poses[:, :3, 3])
+        n = int(np.flatnonzero(near)[-1]) + 2 if near.any() else 1
+        poses = poses[: min(n, len(poses))]
+        return poses[:, :3, 3].copy(), _quats(poses[:, :3, :3])
+
+    def _near_cabinet(self, points: np.ndarray) -> np.ndarray:
+        """Which ``points`` (n, 3) lie within :data:`STOW_CLEARANCE` of the cabinet's
+        box (its open parts' room in front included), (n,)."""
+        w = self.world
+        spec = w.scene.cabinet_spec
+        T = w.body_pose(w.scene.cabinet_prefix + w.scene.cabinet.root)
+        p = (points - T[:3, 3]) @ T[:3, :3]  # cabinet frame
+        lo = np.array([-spec.depth / 2, -spec.width / 2, 0.0]) - STOW_CLEARANCE
+        hi = np.array([spec.depth / 2 + FRONT_ROOM, spec.width / 2, spec.height]) + STOW_CLEARANCE
+        return np.all((p > lo) & (p < hi), axis=1)
 
     def controls(self, prog: Program) -> np.ndarray:
         """The twin's control vectors at every step of ``prog``, (nstep, nu)."""
@@ -552,7 +662,9 @@ def _line_commands(
     return pos, _slerp(qs[seg], qs[seg + 1], frac)
 
 
-def run_batch(twins: list[PlanningTwin], plan: SkillPlan) -> list[Outcome]:
+def run_batch(
+    twins: list[PlanningTwin], plan: SkillPlan, plan_world: ManipulationWorld | None = None
+) -> list[Outcome]:
     """Simulate ``plan`` on every twin (e.g. the particles of a search node), batched:
     the twins whose plans time the same and whose models have the same size run in one
     :func:`mujoco.rollout.rollout` call (controls computed once). Returns one
@@ -566,7 +678,7 @@ def run_batch(twins: list[PlanningTwin], plan: SkillPlan) -> list[Outcome]:
         tw._before = (w.part_positions(), w.cabinet_displacement_vector())
         tw._t_wall = t_wall
         try:
-            prog = tw.program(plan)
+            prog = tw.program(plan, plan_world)
         except SkillStop as stop:
             outs[i] = tw._outcome(plan, stop.status, stop.detail, stop.phase or "plan",
                                   *tw._before, t_wall, 0.0)  # fmt: skip

@@ -72,6 +72,12 @@ STAND_SETBACK = 0.02
 CABINET_FRICTION = 0.4
 #: What can stand in front of the cabinet: the Fetch, or its floating hand (the twin).
 ROBOTS: tuple[str, ...] = ("fetch", "gripper")
+#: Collision bit of the Fetch's geoms. They collide with the world (conaffinity 1) but
+#: not with each other: the robot's motions are planned free of self-contact (the
+#: contact checker turns self-contacts back on: :mod:`strug_manip.control.contacts`),
+#: and leaving the mesh-mesh pairs of neighbouring links out of the simulation's
+#: collision detection makes a physics step much cheaper (README: performance).
+ROBOT_CONTYPE = 2
 
 
 @dataclass(frozen=True)
@@ -317,6 +323,12 @@ def build_scene(config: SceneConfig) -> SceneModel:
         # The twin's hand is attached without a name prefix (see floating_gripper).
         warnings.filterwarnings("ignore", message="Attaching a spec with an empty prefix")
         model = spec.compile()
+    if config.robot == "fetch":
+        root = model.body("base_link").id
+        for g in range(model.ngeom):
+            if model.body_rootid[model.geom_bodyid[g]] == root and model.geom_contype[g]:
+                model.geom_contype[g] = ROBOT_CONTYPE
+                model.geom_conaffinity[g] = 1
     T = np.eye(4)
     T[:3, :3] = np.array(
         [[math.cos(yaw), -math.sin(yaw), 0], [math.sin(yaw), math.cos(yaw), 0], [0, 0, 1]]

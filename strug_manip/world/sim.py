@@ -306,6 +306,14 @@ class ManipulationWorld:
             self.model, self.data, nstep=max(1, round(seconds / self.model.opt.timestep))
         )
 
+    def cabinet_qpos_indices(self) -> np.ndarray:
+        """Indices into ``qpos`` of the cabinet's coordinates: its free joint (7) and
+        every part joint, (7 + n_parts,)."""
+        m = self.model
+        free = int(m.jnt_qposadr[m.joint(self.scene.cabinet_prefix + "free").id])
+        parts = [int(m.jnt_qposadr[m.joint(n).id]) for n in self.part_joints]
+        return np.array([*range(free, free + 7), *parts])
+
     def part_positions(self) -> dict[str, float]:
         """Every cabinet part joint's position [m or rad], by joint name."""
         m, d = self.model, self.data
