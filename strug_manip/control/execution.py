@@ -312,11 +312,11 @@ class FullRobot:
         self.drv.follow(list(placement.lines[k]), seconds, base_path=base_path, monitor=mon)
         self.drv.hold(self.params.settle_time)
         mon(0.0)
-        if self.plan_world is not self.world and line.part_joint is not None:
+        believed = line.part_joint is not None and line.part_q is not None
+        if self.plan_world is not self.world and believed:
             # The believed part is where the line took it: the next plans (the retreat
             # is planned, the stow) see it there, as the robot believes it.
-            if line.part_q is not None:
-                self.plan_world.set_parts({line.part_joint: float(line.part_q[-1])})
+            self.plan_world.set_parts({line.part_joint: float(line.part_q[-1])})
 
     def _line_monitor(self, line: Line | None) -> Callable[[float], None]:
         """Stops a motion when the grasp of ``line`` is lost (if it holds something) or
