@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from planners.errors import ConfigError, StrugError, UnknownNameError
-from strug_manip.control.ik import IK_JOINTS, FetchIK, IKResult, body_geoms
+from strug_manip.control.ik import FetchIK, IKResult, body_geoms
+from strug_manip.robot.fetch import ARM_TORSO_JOINTS as IK_JOINTS
 from strug_manip.robot.fetch import BASE_JOINTS, FETCH_XML, FetchKinematics
 
 N_POSES = 100

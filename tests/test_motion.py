@@ -1,13 +1,21 @@
-"""Arm motion planning with OMPL in the manipulation scene (issue 5, second bullet).
+"""Arm motion planning with OMPL in the manipulation scene.
 
-Plans are replayed in MuJoCo twice: kinematically (densely interpolated waypoints set
-in a scratch ``MjData``, contacts checked by code independent of the planner's) and
-executed by the position actuators while stepping physics; neither may produce a robot
-contact, and the cabinet must not move.
+Scene: ``models/cabinets/drawers_11`` (generator seed 11, drawers with bar handles
+1.06, 0.87 and 0.63 m high; the front 0.96 m ahead of the robot), the base at the
+origin. The key configurations are IK solutions (deterministic) of gripper poses
+pointing +x: in front of the cabinet, inside the top drawer's front, and below and above
+the top drawer opened 0.2 m (the straight joint-space line between those two hits the
+drawer, so the planner must go around it).
+
+Plans are replayed twice: kinematically (waypoints densely interpolated in a scratch
+``MjData``, contacts read by code independent of the planner's checker) and executed by
+the joint driver with physics; neither may produce a robot contact, and the cabinet must
+not move.
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import mujoco
@@ -15,94 +23,120 @@ import numpy as np
 import pytest
 
 from planners.errors import ConfigError, UnknownNameError
+from strug_manip.control import ControlContext
+from strug_manip.control.driver import JointDriver
 from strug_manip.control.motion import (
-    DEFAULT_JOINTS,
     GOAL_INVALID,
     NO_PLAN,
     START_INVALID,
     ArmMotionPlanner,
+    ArmValidity,
     MotionPlan,
 )
+from strug_manip.robot.fetch import ARM_TORSO_JOINTS, BASE_JOINTS, TUCK
 from strug_manip.world.scene import SceneConfig
 from strug_manip.world.sim import ManipulationWorld
 
-#: Untucked ready posture (torso + arm, DEFAULT_JOINTS order): the scripted opening's
-#: untuck waypoint, forearm forward, gripper pointing forward.
-READY = (0.3, 1.32, 1.40, -1.5, 1.72, 0.0, 0.0, 0.0)
-#: Gripper at (0.80, 0, 0.85) m pointing +x, 0.2 m in front of the cabinet (IK solution).
-IN_FRONT = (0.376, 0.794, 0.853, -1.383, 1.538, 0.976, -0.906, 1.382)
-#: Arm stretched forward: the gripper is inside the top drawer's front.
-INTO_CABINET = (0.064, 0.0, 0.0, -1.013, -0.001, 0.465, 0.001, 0.548)
-#: With the top drawer open by DRAWER_OPEN: gripper below it at (0.70, 0, 0.45) m and
-#: above it at (0.75, 0, 1.10) m, both pointing +x; the straight joint-space line between
-#: them hits the drawer, so the planner must go around it.
-BELOW_DRAWER = (0.011, 1.196, 1.425, -1.44, 1.595, 1.418, -0.508, 1.58)
-ABOVE_DRAWER = (0.376, 0.746, 0.599, -1.734, 2.145, 0.317, -1.277, 2.024)
-DRAWER_OPEN = {"joint_1": 0.22}
+BASE = np.zeros(3)
+#: Gripper positions [m] (pointing +x) of the key configurations.
+IN_FRONT = (0.75, 0.0, 1.0)
+INTO_CABINET = (1.05, 0.0, 1.06)
+BELOW_DRAWER = (0.82, 0.0, 0.97)
+ABOVE_DRAWER = (0.82, 0.0, 1.25)
+DRAWER_OPEN = {"joint_1": 0.2}
 #: Joint step of the kinematic replay [rad or m].
 REPLAY_STEP = 0.005
-
-
-def q_of(values: tuple[float, ...]) -> dict[str, float]:
-    return dict(zip(DEFAULT_JOINTS, values, strict=True))
+#: Bodies that are not the robot's (besides the cabinet's).
+NON_ROBOT = ("world", "table", "object", "cabinet_table")
 
 
 @pytest.fixture(scope="module")
 def world() -> ManipulationWorld:
-    w = ManipulationWorld(SceneConfig(cabinet_seed=3))
+    w = ManipulationWorld(SceneConfig(cabinet_seed=11, cabinet_kinds=("drawer",)))
     yield w
     w.close()
 
 
 @pytest.fixture(scope="module")
-def planner(world: ManipulationWorld) -> ArmMotionPlanner:
+def ctx() -> ControlContext:
+    return ControlContext()
+
+
+@pytest.fixture(scope="module")
+def q(ctx) -> dict[str, np.ndarray]:
+    """Torso + arm (8,) of the key configurations, by name."""
+    out = {"tuck": np.array(TUCK)}
+    for name, p in (
+        ("in_front", IN_FRONT),
+        ("into_cabinet", INTO_CABINET),
+        ("below", BELOW_DRAWER),
+        ("above", ABOVE_DRAWER),
+    ):
+        T = np.eye(4)
+        T[:3, 3] = p
+        r = ctx.ik.solve(T, dict(zip(BASE_JOINTS, BASE.tolist(), strict=True)))
+        assert r.success, name
+        out[name] = np.array([r.q[j] for j in ARM_TORSO_JOINTS])
+    return out
+
+
+@pytest.fixture(scope="module")
+def planner(world) -> ArmMotionPlanner:
     return ArmMotionPlanner(world.model)
 
 
-def place_robot(world: ManipulationWorld, q: tuple[float, ...], parts=None) -> None:
-    """Reset the world, then put torso + arm at ``q`` (kinematically, actuators too)."""
+def by_name(x: np.ndarray) -> dict[str, float]:
+    return dict(zip(ARM_TORSO_JOINTS, x.tolist(), strict=True))
+
+
+def place_robot(world: ManipulationWorld, x: np.ndarray, parts=None) -> None:
+    """Reset the world, then put torso + arm at ``x`` (kinematically, servos holding)."""
     world.reset(parts)
     m, d = world.model, world.data
-    for name, v in zip(DEFAULT_JOINTS, q, strict=True):
+    for name, v in zip(ARM_TORSO_JOINTS, x, strict=True):
         d.qpos[m.jnt_qposadr[m.joint(name).id]] = v
-        d.ctrl[m.actuator(name.removesuffix("_joint")).id] = v
+    world.hold_position()
     mujoco.mj_forward(m, d)
 
 
+def validity(ctx: ControlContext, world: ManipulationWorld, allowed=()) -> ArmValidity:
+    checker = ctx.checker(world.model).load(world.data)
+    checker.attach(None)
+    checker.allow(allowed)
+    return ArmValidity(checker, BASE)
+
+
 class RobotContacts:
-    """Robot contacts in a MuJoCo state (independent of the planner's bookkeeping)."""
+    """Robot contacts in a MuJoCo state (independent of the planner's checker)."""
 
     def __init__(self, world: ManipulationWorld) -> None:
-        m = world.model
-        self.m = m
+        m = self.m = world.model
         pre = world.scene.cabinet_prefix
-        non_robot = ("world", "table", "object")
         self.robot = {
             b
             for b in range(m.nbody)
-            if not (m.body(b).name.startswith(pre) or m.body(b).name in non_robot)
+            if not (m.body(b).name.startswith(pre) or m.body(b).name in NON_ROBOT)
         }
         assert m.body("shoulder_pan_link").id in self.robot
 
     def __call__(self, d: mujoco.MjData) -> list[str]:
-        m = self.m
-        out = []
+        m, out = self.m, []
         for k in range(d.ncon):
             c = d.contact[k]
             b1, b2 = int(m.geom_bodyid[c.geom1]), int(m.geom_bodyid[c.geom2])
-            if b1 in self.robot or b2 in self.robot:
+            if (b1 in self.robot) != (b2 in self.robot):  # not the robot with itself
                 out.append(f"{m.body(b1).name}/{m.body(b2).name} ({c.dist * 1000:.1f} mm)")
         return out
 
 
-def replay_kinematic(world: ManipulationWorld, plan: MotionPlan) -> list[str]:
-    """Contacts along the waypoint polyline, sampled every REPLAY_STEP."""
+def replay_kinematic(world: ManipulationWorld, waypoints: np.ndarray) -> list[str]:
+    """Robot contacts along the waypoint polyline, sampled every REPLAY_STEP."""
     m = world.model
     d = mujoco.MjData(m)
     d.qpos[:] = world.data.qpos
-    adr = [m.jnt_qposadr[m.joint(n).id] for n in plan.joints]
+    adr = [m.jnt_qposadr[m.joint(n).id] for n in ARM_TORSO_JOINTS]
     contacts = RobotContacts(world)
-    for qa, qb in zip(plan.waypoints[:-1], plan.waypoints[1:], strict=True):
+    for qa, qb in itertools.pairwise(waypoints):
         n = max(1, math.ceil(float(np.max(np.abs(qb - qa))) / REPLAY_STEP))
         for k in range(n + 1):
             d.qpos[adr] = qa + (k / n) * (qb - qa)
@@ -114,147 +148,119 @@ def replay_kinematic(world: ManipulationWorld, plan: MotionPlan) -> list[str]:
     return []
 
 
-def execute(world: ManipulationWorld, plan: MotionPlan) -> tuple[list[str], float]:
-    """Run the trajectory through the position actuators, stepping physics, then hold for
-    0.5 s. Returns (robot contacts seen at any step, max tracking error [rad or m])."""
-    m, d = world.model, world.data
-    act = [m.actuator(n.removesuffix("_joint")).id for n in plan.joints]
-    adr = [m.jnt_qposadr[m.joint(n).id] for n in plan.joints]
+def execute(world: ManipulationWorld, waypoints: np.ndarray) -> tuple[list[str], float]:
+    """Follow the waypoints with the joint driver (physics), then hold 0.5 s. Returns the
+    robot contacts seen (every 10 ms) and the final joint error [rad or m]."""
+    drv = JointDriver(world)
     contacts = RobotContacts(world)
-    _, qs = plan.trajectory(m.opt.timestep)
-    hold = np.repeat(qs[-1:], round(0.5 / m.opt.timestep), axis=0)
     seen: list[str] = []
-    err = 0.0
-    for q in np.vstack([qs, hold]):
-        d.ctrl[act] = q
-        mujoco.mj_step(m, d)
-        err = max(err, float(np.max(np.abs(d.qpos[adr] - q))))
-        seen += contacts(d)
-    return seen, err
+    drv.follow(list(waypoints[1:]), 0.3, monitor=lambda _: seen.extend(contacts(world.data)))
+    drv.hold(0.5)
+    return seen, float(np.max(np.abs(drv.q - waypoints[-1])))
 
 
 def check_replays(world: ManipulationWorld, plan: MotionPlan) -> None:
     parts_before = world.part_positions()
-    assert replay_kinematic(world, plan) == []
-    hits, err = execute(world, plan)
+    assert replay_kinematic(world, plan.waypoints) == []
+    hits, err = execute(world, plan.waypoints)
     assert hits == [], hits[:5]
-    assert err < 0.08, f"tracking error {err:.3f}"  # position actuators lag a little
+    assert err < 0.02, f"final joint error {err:.3f}"
     assert world.cabinet_displacement() < 1e-3
-    for name, q in world.part_positions().items():
-        assert abs(q - parts_before[name]) < 1e-3, name
-    m, d = world.model, world.data
-    final = [d.qpos[m.jnt_qposadr[m.joint(n).id]] for n in plan.joints]
-    np.testing.assert_allclose(final, plan.waypoints[-1], atol=0.02)
+    for name, v in world.part_positions().items():
+        assert abs(v - parts_before[name]) < 1e-3, name
 
 
 @pytest.mark.parametrize("try_straight", [True, False], ids=["straight-first", "rrtconnect"])
-def test_ready_to_front_of_cabinet_replays_collision_free(world, try_straight: bool) -> None:
+def test_tuck_to_front_of_cabinet_replays_collision_free(world, ctx, q, try_straight) -> None:
     planner = ArmMotionPlanner(world.model, try_straight=try_straight)
-    place_robot(world, READY)
-    start, goal = q_of(READY), q_of(IN_FRONT)
-    assert planner.contacts(start, world.data) == []
-    assert planner.contacts(goal, world.data) == []
-    plan = planner.plan(start, goal, world.data, timeout=2.0, seed=0)
+    place_robot(world, q["tuck"])
+    v = validity(ctx, world)
+    assert v.free(q["tuck"]) and v.free(q["in_front"])
+    plan = planner.plan(by_name(q["tuck"]), by_name(q["in_front"]), v, timeout=2.0, seed=0)
     assert plan.success, (plan.reason, plan.detail)
-    assert plan.reason == ""
-    assert plan.waypoints.shape[1] == len(DEFAULT_JOINTS) and len(plan.waypoints) >= 2
-    np.testing.assert_array_equal(plan.waypoints[0], READY)
-    np.testing.assert_array_equal(plan.waypoints[-1], IN_FRONT)
-    straight = float(np.linalg.norm(np.subtract(IN_FRONT, READY)))
+    assert plan.reason == "" and plan.joints == ARM_TORSO_JOINTS
+    assert plan.waypoints.shape[1] == len(ARM_TORSO_JOINTS) and len(plan.waypoints) >= 2
+    np.testing.assert_array_equal(plan.waypoints[0], q["tuck"])
+    np.testing.assert_array_equal(plan.waypoints[-1], q["in_front"])
+    straight = float(np.linalg.norm(q["in_front"] - q["tuck"]))
     assert plan.path_length >= straight - 1e-9
     assert 0 < plan.planning_time < 2.0 + 5.0
     check_replays(world, plan)
 
 
-def test_plan_around_open_drawer_replays_collision_free(world, planner) -> None:
-    place_robot(world, BELOW_DRAWER, DRAWER_OPEN)
-    start, goal = q_of(BELOW_DRAWER), q_of(ABOVE_DRAWER)
-    # The straight line is blocked: planning is needed.
-    line = [{n: start[n] + s * (goal[n] - start[n]) for n in start} for s in np.linspace(0, 1, 101)]
-    assert any(planner.contacts(q, world.data) for q in line)
-    straight = MotionPlan(True, DEFAULT_JOINTS, np.array([BELOW_DRAWER, ABOVE_DRAWER]), 0, 0)
-    assert replay_kinematic(world, straight) != []  # the replay does see collisions
-    plan = planner.plan(start, goal, world.data, timeout=3.0, seed=1)
+def test_plan_around_an_open_drawer_replays_collision_free(world, ctx, q, planner) -> None:
+    place_robot(world, q["below"], DRAWER_OPEN)
+    v = validity(ctx, world)
+    # The straight line is blocked: planning is needed, and the replay sees it.
+    assert v.checker.segment(np.r_[BASE, q["below"]], np.r_[BASE, q["above"]]) != []
+    assert replay_kinematic(world, np.array([q["below"], q["above"]])) != []
+    plan = planner.plan(by_name(q["below"]), by_name(q["above"]), v, timeout=3.0, seed=1)
     assert plan.success, (plan.reason, plan.detail)
     assert len(plan.waypoints) >= 3
     check_replays(world, plan)
 
 
-def test_no_plan_within_tiny_timeout(world, planner) -> None:
-    place_robot(world, BELOW_DRAWER, DRAWER_OPEN)
-    plan = planner.plan(q_of(BELOW_DRAWER), q_of(ABOVE_DRAWER), world.data, timeout=1e-4)
-    assert not plan.success
-    assert plan.reason == NO_PLAN
+def test_no_plan_within_a_tiny_timeout(world, ctx, q, planner) -> None:
+    place_robot(world, q["below"], DRAWER_OPEN)
+    plan = planner.plan(
+        by_name(q["below"]), by_name(q["above"]), validity(ctx, world), timeout=1e-4
+    )
+    assert not plan.success and plan.reason == NO_PLAN
+    assert plan.waypoints.shape == (0, len(ARM_TORSO_JOINTS)) and math.isnan(plan.path_length)
 
 
-def test_same_seed_same_plan(world, planner) -> None:
-    place_robot(world, BELOW_DRAWER, DRAWER_OPEN)
-    start, goal = q_of(BELOW_DRAWER), q_of(ABOVE_DRAWER)
-    a = planner.plan(start, goal, world.data, timeout=3.0, seed=7)
-    b = planner.plan(start, goal, world.data, timeout=3.0, seed=7)
+def test_same_seed_same_plan(world, ctx, q, planner) -> None:
+    place_robot(world, q["below"], DRAWER_OPEN)
+    v = validity(ctx, world)
+    a = planner.plan(by_name(q["below"]), by_name(q["above"]), v, timeout=3.0, seed=7)
+    b = planner.plan(by_name(q["below"]), by_name(q["above"]), v, timeout=3.0, seed=7)
     assert a.success and b.success
     np.testing.assert_array_equal(a.waypoints, b.waypoints)
 
 
-def test_trajectory_within_velocity_limits(world, planner) -> None:
-    place_robot(world, READY)
-    plan = planner.plan(q_of(READY), q_of(IN_FRONT), world.data, seed=0)
-    assert plan.success
-    dt = 0.01
-    times, qs = plan.trajectory(dt)
-    assert times[0] == 0.0 and math.isclose(times[-1], plan.duration)
-    assert np.all(np.diff(times) > 0) and np.all(np.diff(times) <= dt + 1e-12)
-    assert qs.shape == (len(times), len(DEFAULT_JOINTS))
-    np.testing.assert_allclose(qs[0], READY, atol=1e-12)
-    np.testing.assert_allclose(qs[-1], IN_FRONT, atol=1e-12)
-    speed = np.abs(np.diff(qs, axis=0)) / np.diff(times)[:, None]
-    assert np.all(speed <= plan.velocity_limits * (1 + 1e-6))
-    with pytest.raises(ConfigError):
-        plan.trajectory(0.0)
+def test_goal_inside_the_cabinet_is_goal_invalid(world, ctx, q, planner) -> None:
+    place_robot(world, q["tuck"])
+    plan = planner.plan(by_name(q["tuck"]), by_name(q["into_cabinet"]), validity(ctx, world))
+    assert not plan.success and plan.reason == GOAL_INVALID
+    assert "cabinet/link_1" in plan.detail
+    assert plan.waypoints.shape == (0, len(ARM_TORSO_JOINTS))
 
 
-def test_goal_inside_cabinet_is_goal_invalid(world, planner) -> None:
-    place_robot(world, READY)
-    plan = planner.plan(q_of(READY), q_of(INTO_CABINET), world.data, seed=0)
-    assert not plan.success
-    assert plan.reason == GOAL_INVALID
-    assert "cabinet/" in plan.detail
-    assert plan.waypoints.shape == (0, len(DEFAULT_JOINTS))
-    with pytest.raises(ConfigError):
-        plan.trajectory(0.01)
-
-
-def test_start_invalid_and_allowed_contacts(world) -> None:
-    place_robot(world, READY)
-    planner = ArmMotionPlanner(world.model)
-    plan = planner.plan(q_of(INTO_CABINET), q_of(READY), world.data, seed=0)
-    assert plan.reason == START_INVALID
-    out_of_range = q_of(READY) | {"elbow_flex_joint": 3.0}
-    plan = planner.plan(out_of_range, q_of(READY), world.data, seed=0)
+def test_start_invalid_and_allowed_contacts(world, ctx, q, planner) -> None:
+    place_robot(world, q["tuck"])
+    plan = planner.plan(by_name(q["into_cabinet"]), by_name(q["tuck"]), validity(ctx, world))
+    assert plan.reason == START_INVALID and "cabinet/link_1" in plan.detail
+    out_of_range = by_name(q["tuck"]) | {"elbow_flex_joint": 3.0}
+    plan = planner.plan(out_of_range, by_name(q["tuck"]), validity(ctx, world))
     assert plan.reason == START_INVALID and "elbow_flex_joint" in plan.detail
-    # Allowing the gripper's contacts with the drawer it touches makes the state valid.
-    assert planner.contacts(q_of(INTO_CABINET), world.data) != []
-    allowed = [
-        (a, "cabinet/link_1")
-        for a in ("gripper_link", "r_gripper_finger_link", "l_gripper_finger_link")
-    ]
-    assert planner.contacts(q_of(INTO_CABINET), world.data, allowed) == []
+    # Allowing the hand's contacts with the drawer it touches makes the start valid.
+    checker = ctx.checker(world.model)
+    hand_drawer = checker.hand_with([checker.body_id("cabinet/link_1")])
+    v = validity(ctx, world, hand_drawer)
+    assert v.free(q["into_cabinet"])
+    plan = planner.plan(by_name(q["into_cabinet"]), by_name(q["in_front"]), v, seed=0)
+    assert plan.success, (plan.reason, plan.detail)
 
 
-def test_bad_inputs_raise(world, planner) -> None:
-    place_robot(world, READY)
-    start, goal = q_of(READY), q_of(IN_FRONT)
-    with pytest.raises(UnknownNameError, match="shoulder_pan_joint"):
-        planner.plan(start | {"elbow_joint": 0.0}, goal, world.data)
-    with pytest.raises(UnknownNameError, match="torso_lift_joint"):
+def test_bad_inputs_raise(world, ctx, q, planner) -> None:
+    place_robot(world, q["tuck"])
+    v = validity(ctx, world)
+    start, goal = by_name(q["tuck"]), by_name(q["in_front"])
+    with pytest.raises(UnknownNameError, match=r"'elbow_joint'.*shoulder_pan_joint"):
+        planner.plan(start | {"elbow_joint": 0.0}, goal, v)
+    with pytest.raises(UnknownNameError, match="'no_such_joint'"):
         ArmMotionPlanner(world.model, ["torso_lift_joint", "no_such_joint"])
-    with pytest.raises(UnknownNameError, match="RRTConnect"):
+    with pytest.raises(UnknownNameError, match=r"'RRTConect'.*RRTConnect"):
         ArmMotionPlanner(world.model, planner="RRTConect")
-    with pytest.raises(ConfigError, match="finite"):
-        planner.plan(start, goal | {"wrist_flex_joint": float("nan")}, world.data)
+    with pytest.raises(ConfigError, match=r"wrist_flex_joint.*finite.*nan"):
+        planner.plan(start, goal | {"wrist_flex_joint": float("nan")}, v)
     with pytest.raises(ConfigError, match="misses"):
-        planner.plan({"torso_lift_joint": 0.3}, goal, world.data)
-    with pytest.raises(ConfigError, match="timeout"):
-        planner.plan(start, goal, world.data, timeout=-1.0)
-    with pytest.raises(ConfigError, match="seed"):
-        planner.plan(start, goal, world.data, seed=-1)
+        planner.plan({"torso_lift_joint": 0.3}, goal, v)
+    with pytest.raises(ConfigError, match=r"timeout.*-1.0"):
+        planner.plan(start, goal, v, timeout=-1.0)
+    with pytest.raises(ConfigError, match=r"seed.*-1"):
+        planner.plan(start, goal, v, seed=-1)
+    with pytest.raises(ConfigError, match="distinct"):
+        ArmMotionPlanner(world.model, ["torso_lift_joint", "torso_lift_joint"])
+    with pytest.raises(ConfigError, match="str"):
+        ArmMotionPlanner(world.model, "torso_lift_joint")

@@ -1,14 +1,17 @@
-"""Save an image strip of the controllers at work: ``docs/controllers.png``.
+"""Save an image strip of the skills at work: ``docs/controllers.png``.
 
 Usage::
 
     python tools/controller_strip.py [--out docs/controllers.png] [--width 480]
 
-Three rows of overview-camera frames at each run's key instants (under the true
-model, generator seed 3): ``OpenDrawer`` on the top drawer of the drawer cabinet
-(start, pre-grasp, grasp, pulled open), ``OpenDoor`` on the right-hinged door of the
-door cabinet (same instants), and ``Pick`` of the box on the table then ``Place`` of it
-into the top drawer opened 0.2 m (grasp, lifted, above the drawer, released).
+Three rows of overview-camera frames at each run's key instants, full robot, true
+models: ``OpenDrawer`` on the top drawer ``link_1`` of ``models/cabinets/drawers_11``
+(generator seed 11: start, pre-grasp, grasped, pulled open, back in its tuck),
+``OpenDoor`` on the right-hinged door ``link_1`` of the doors-only cabinet of seed 25
+(the same instants; the overview camera sees its swing past the robot), and the chain
+that follows the first row: ``Pick`` of the box on its table (grasped, lifted) then
+``Place`` of it into the open drawer (above it, released, back in the tuck). Each row's
+title gives the outcomes' statuses.
 """
 
 from __future__ import annotations
@@ -19,27 +22,30 @@ from pathlib import Path
 import numpy as np
 from PIL import Image, ImageDraw
 
-from strug_manip.control.controllers import (
+from strug_manip.control import (
+    ControlContext,
     OpenDoor,
     OpenDrawer,
     Pick,
     Place,
-    handle_grasp,
-    true_joint,
+    handle_grasps,
+    place_target,
 )
+from strug_manip.objects.hypotheses import BelievedJoint
 from strug_manip.world import ManipulationWorld, SceneConfig
 
 ROOT = Path(__file__).resolve().parent.parent
+#: Key instants shown for an opening (the observer's names).
+OPENING_KEYS = ("start", "pre-grasp", "grasp", "move", "end")
 
 
-def _place_pose(world: ManipulationWorld, q: float) -> np.ndarray:
-    part = world.scene.cabinet_spec.part("link_1")
+def opening(world: ManipulationWorld, link: str):
+    """The true-model opening of ``link`` with its first handle grasp."""
+    part = world.scene.cabinet_spec.part(link)
     T = world.scene.T_world_cabinet
-    c = (T @ np.r_[part.point_at(part.interior_center, q), 1.0])[:3]
-    s = part.interior_size
-    p = np.eye(4)
-    p[:3, 3] = [min(c[0] + s[0] / 2, 0.98) - 0.07, c[1], c[2] - s[2] / 2 + 0.045]
-    return p
+    g = handle_grasps(part, 0.0, T)[0]
+    joint = BelievedJoint.of_part(part, 0.0, T)
+    return OpenDrawer(g, joint) if joint.type == "prismatic" else OpenDoor(g, joint)
 
 
 def main() -> None:
@@ -48,6 +54,7 @@ def main() -> None:
     parser.add_argument("--width", type=int, default=480, help="frame width [px] (4:3)")
     args = parser.parse_args()
     w, h = args.width, args.width * 3 // 4
+    ctx = ControlContext()
     rows: list[tuple[str, list[tuple[str, np.ndarray]]]] = []
 
     def grab(world: ManipulationWorld, frames: list, keep: tuple[str, ...], prefix: str = ""):
@@ -57,31 +64,32 @@ def main() -> None:
 
         return observe
 
-    drawers = ManipulationWorld(SceneConfig(cabinet_seed=3, cabinet_kinds=("drawer",)))
+    drawers = ManipulationWorld(SceneConfig(cabinet_seed=11, cabinet_kinds=("drawer",)))
     frames: list = []
-    g = handle_grasp(drawers, "link_1")
-    out = OpenDrawer(g, true_joint(drawers, "link_1")).run(
-        drawers, observer=grab(drawers, frames, ("start", "pre-grasp", "grasp", "end"))
+    out = opening(drawers, "link_1").run(
+        drawers, ctx=ctx, observer=grab(drawers, frames, OPENING_KEYS)
     )
-    rows.append((f"OpenDrawer: {out.reason}", frames))
+    rows.append((f"OpenDrawer: {out.status}", frames))
 
-    doors = ManipulationWorld(SceneConfig(cabinet_seed=3, cabinet_kinds=("door",)))
+    doors = ManipulationWorld(SceneConfig(cabinet_seed=25, cabinet_kinds=("door",)))
     frames = []
-    g = handle_grasp(doors, "link_1")
-    out = OpenDoor(g, true_joint(doors, "link_1")).run(
-        doors, observer=grab(doors, frames, ("start", "pre-grasp", "grasp", "end"))
-    )
-    rows.append((f"OpenDoor: {out.reason}", frames))
-
-    drawers.reset({"joint_1": 0.2})
-    frames = []
-    a = Pick("object").run(drawers, observer=grab(drawers, frames, ("grasp", "end"), "pick "))
-    b = Place("object", _place_pose(drawers, 0.2)).run(
-        drawers, observer=grab(drawers, frames, ("pre-place", "end"), "place ")
-    )
-    rows.append((f"Pick: {a.reason}, Place: {b.reason}", frames))
-    drawers.close()
+    out = opening(doors, "link_1").run(doors, ctx=ctx, observer=grab(doors, frames, OPENING_KEYS))
+    rows.append((f"OpenDoor: {out.status}", frames))
     doors.close()
+
+    spec = drawers.scene.cabinet_spec
+    joint = drawers.scene.cabinet_prefix + spec.part("link_1").joint
+    root = drawers.scene.cabinet_prefix + drawers.scene.cabinet.root
+    target = place_target(spec, "link_1", drawers.part_positions()[joint], drawers.body_pose(root))
+    frames = []
+    a = Pick("object", target.grasp).run(
+        drawers, ctx=ctx, observer=grab(drawers, frames, ("grasp", "lift"), "pick ")
+    )
+    b = Place("object", target.p, target.lift).run(
+        drawers, ctx=ctx, observer=grab(drawers, frames, ("pre-grasp", "release", "end"), "place ")
+    )
+    rows.append((f"Pick: {a.status}, Place: {b.status}", frames))
+    drawers.close()
 
     cols = max(len(f) for _, f in rows)
     sheet = Image.new("RGB", (cols * w, len(rows) * h), "white")
@@ -90,7 +98,7 @@ def main() -> None:
         for c, (name, rgb) in enumerate(frames):
             sheet.paste(Image.fromarray(rgb), (c * w, r * h))
             label = f"{title} | {name}" if c == 0 else name
-            draw.rectangle((c * w, r * h, c * w + 8 * len(label) + 8, r * h + 16), fill="black")
+            draw.rectangle((c * w, r * h, c * w + 7 * len(label) + 8, r * h + 16), fill="black")
             draw.text((c * w + 4, r * h + 3), label, fill="white")
     args.out.parent.mkdir(parents=True, exist_ok=True)
     sheet.save(args.out, optimize=True)

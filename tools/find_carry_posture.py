@@ -34,7 +34,6 @@ from strug_manip.robot.fetch import ARM_TORSO_JOINTS, BASE_JOINTS, GRIPPER_SITE
 from strug_manip.world import ManipulationWorld, SceneConfig
 from strug_manip.world.scene import OBJECT_HALF_SIZE
 
-
 #: Clearance kept around the robot's parts and the held object [m].
 CLEARANCE = 0.03
 

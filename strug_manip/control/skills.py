@@ -105,12 +105,12 @@ class Skill:
         Raises:
             ConfigError, UnknownNameError: bad parameters (before anything moves).
         """
-        pw = world if plan_world is None else plan_world
+        # The robot first: it checks the worlds and the seed before anything is planned.
+        robot = FullRobot(world, ctx, params, plan_world=plan_world, seed=seed, observer=observer)
+        pw = robot.plan_world
         if pw is not world:
             pw.copy_robot_state(world)
-        plan = self.plan(pw, params)
-        robot = FullRobot(world, ctx, params, plan_world=pw, seed=seed, observer=observer)
-        return robot.run(plan)
+        return robot.run(self.plan(pw, params))
 
     def simulate(
         self,

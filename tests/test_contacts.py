@@ -1,0 +1,118 @@
+"""The robot-contact checker (:class:`strug_manip.control.contacts.ContactChecker`): the
+one collision check of plans, lines, placements and routes.
+
+Scene: ``models/cabinets/drawers_11`` (seed 11, top drawer ``link_1``'s bar handle at
+(0.98, 0, 1.06) m), the base at the origin; configurations are IK solutions.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from planners.errors import ConfigError, UnknownNameError
+from strug_manip.control import ControlContext
+from strug_manip.control.contacts import ContactChecker
+from strug_manip.robot.fetch import ARM_TORSO_JOINTS, BASE_JOINTS, TUCK
+from strug_manip.world.scene import SceneConfig
+from strug_manip.world.sim import ManipulationWorld
+
+BASE = np.zeros(3)
+
+
+@pytest.fixture(scope="module")
+def world() -> ManipulationWorld:
+    w = ManipulationWorld(SceneConfig(cabinet_seed=11, cabinet_kinds=("drawer",)))
+    yield w
+    w.close()
+
+
+@pytest.fixture(scope="module")
+def ik():
+    return ControlContext().ik
+
+
+def arm_at(ik, p) -> np.ndarray:
+    """Base + torso + arm (11,) with the gripper at ``p`` (3,) [m] pointing +x."""
+    T = np.eye(4)
+    T[:3, 3] = p
+    r = ik.solve(T, dict(zip(BASE_JOINTS, BASE.tolist(), strict=True)))
+    assert r.success
+    return np.concatenate([BASE, [r.q[j] for j in ARM_TORSO_JOINTS]])
+
+
+@pytest.fixture
+def checker(world) -> ContactChecker:
+    world.reset()
+    c = ContactChecker(world.model, (*BASE_JOINTS, *ARM_TORSO_JOINTS))
+    return c.load(world.data)
+
+
+def test_contacts_name_the_bodies_and_allowed_pairs_clear_them(checker, ik) -> None:
+    tuck = np.concatenate([BASE, TUCK])
+    assert checker.free(tuck) and checker.contacts(tuck) == []
+    inside = arm_at(ik, (1.05, 0.0, 1.06))  # the hand inside the top drawer's front
+    hits = checker.contacts(inside)
+    assert hits and all("cabinet/link_1" in h for h in hits), hits
+    assert checker.pairs(inside).shape[1] == 2
+    drawer = checker.body_id("cabinet/link_1")
+    checker.allow(checker.hand_with([drawer]))
+    assert checker.free(inside)
+    checker.allow()  # replaced, not added to
+    assert not checker.free(inside)
+    # A segment from free to blocked reports the contacts on the way.
+    outside = arm_at(ik, (0.8, 0.0, 1.06))
+    assert checker.free(outside)
+    assert checker.segment(outside, inside) != [] and checker.path([outside]) == []
+    assert checker.path([outside, arm_at(ik, (0.8, 0.0, 0.95))]) == []
+    # The straight joint-space line out of the tuck folds the wrist into the torso: the
+    # robot's contacts with itself count too.
+    hits = checker.path([np.concatenate([BASE, TUCK]), outside])
+    assert hits and not any("cabinet" in h for h in hits), hits
+
+
+def test_the_checker_sees_the_state_it_was_loaded_with(world, ik) -> None:
+    """Opened 0.2 m, the top drawer fills where the hand was free (the drawer's front
+    comes to x = 0.76 m); set() moves a joint of the scratch state without physics."""
+    hand = arm_at(ik, (0.85, 0.0, 1.06))
+    world.reset()
+    c = ContactChecker(world.model, (*BASE_JOINTS, *ARM_TORSO_JOINTS)).load(world.data)
+    assert c.free(hand)
+    world.reset({"joint_1": 0.2})
+    c.load(world.data)
+    assert any("cabinet/link_1" in h for h in c.contacts(hand))
+    c.set({"cabinet/joint_1": 0.0})
+    assert c.get("cabinet/joint_1") == 0.0 and c.free(hand)
+    world.reset()
+
+
+def test_an_attached_object_follows_the_gripper_and_its_contacts_count(checker, ik) -> None:
+    T_go = np.eye(4)
+    T_go[0, 3] = 0.35  # the object held 0.35 m ahead of the TCP: into the drawer's front
+    hand = arm_at(ik, (0.75, 0.0, 1.06))
+    assert checker.free(hand)
+    checker.attach("object", T_go)
+    assert checker.attached_body == checker.body_id("object")
+    hits = checker.contacts(hand)
+    assert any("object" in h and "cabinet" in h for h in hits), hits
+    T_go[0, 3] = 0.0  # in the hand: touching the fingers is allowed
+    checker.attach("object", T_go)
+    checker.allow()
+    assert checker.free(hand)
+    checker.attach(None)
+    assert checker.attached_body == -1
+
+
+def test_bad_names_and_joints_raise(world, checker) -> None:
+    with pytest.raises(UnknownNameError, match="'elbow'"):
+        ContactChecker(world.model, ("torso_lift_joint", "elbow"))
+    with pytest.raises(ConfigError, match=r"object/free.*hinge or slide"):
+        ContactChecker(world.model, ("object/free",))
+    with pytest.raises(ConfigError, match="non-empty"):
+        ContactChecker(world.model, ())
+    with pytest.raises(UnknownNameError, match="'mug'"):
+        checker.body_id("mug")
+    with pytest.raises(UnknownNameError, match="'joint_9'"):
+        checker.set({"joint_9": 0.1})
+    with pytest.raises(ConfigError, match=r"free joint.*cabinet/link_1"):
+        checker.attach("cabinet/link_1", np.eye(4))

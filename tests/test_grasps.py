@@ -1,0 +1,118 @@
+"""Handle grasps (:func:`strug_manip.control.grasps.handle_grasps`) and where the object
+goes (:func:`strug_manip.control.targets.place_target`, judged by the manipulation
+domain's rules).
+
+Cabinets (object frame: +x out of the front): generator seed 11 drawers (bar handles
+along y), seed 17 (a left-hinged door ``link_3`` with a vertical bar, a top flap
+``link_9``), seed 2 doors (knobs: the right-hinged ``link_1``), seed 7 doors (no handles).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from planners.errors import ConfigError, UnknownNameError
+from strug_manip.control import flip_fingers, handle_grasps, held_grasp, place_target
+from strug_manip.control.grasps import PITCHES
+from strug_manip.domains.manipulation.rules import DRAG_LIMIT, dragged, inside, open_enough
+from strug_manip.objects.generator import axis_angle, generate_cabinet
+from strug_manip.objects.hypotheses import check_pose
+
+FRONT = np.array([1.0, 0.0, 0.0])
+
+
+@pytest.fixture(scope="module")
+def cabinets():
+    return {
+        "drawers_11": generate_cabinet(11, kinds=("drawer",)),
+        "mixed_17": generate_cabinet(17),
+        "doors_2": generate_cabinet(2, kinds=("door",)),
+        "doors_7": generate_cabinet(7, kinds=("door",)),
+    }
+
+
+def check_grasps(part, gs, q: float = 0.0, T: np.ndarray | None = None) -> None:
+    T = np.eye(4) if T is None else T
+    R_part = axis_angle(part.axis, q) if part.joint_type == "revolute" else np.eye(3)
+    normal = T[:3, :3] @ R_part @ FRONT
+    assert len(gs) % (1 + len(PITCHES)) == 0 and gs
+    for k, g in enumerate(gs):
+        check_pose("grasp", g)
+        np.testing.assert_allclose(g[:3, 3], part.handle_at(q, T), atol=1e-12)
+        pitch = (0.0, *PITCHES)[k % (1 + len(PITCHES))]
+        # The approach (x) into the front, pitched down by ``pitch`` about the front's
+        # horizontal axis; the fingers (y) pointing up, or level toward +y.
+        assert g[:3, 0] @ -normal == pytest.approx(np.cos(pitch), abs=1e-9)
+        assert g[2, 0] == pytest.approx(-np.sin(pitch) * np.hypot(*normal[:2]), abs=1e-9)
+        assert g[2, 1] > -1e-9
+
+
+def test_bar_grasps_straddle_the_bar(cabinets) -> None:
+    for name, link in (("drawers_11", "link_1"), ("mixed_17", "link_3"), ("mixed_17", "link_9")):
+        part = cabinets[name].part(link)
+        assert part.handle == "bar"
+        gs = handle_grasps(part)
+        check_grasps(part, gs)
+        assert len(gs) == 1 + len(PITCHES)
+        for g in gs:
+            assert abs(g[:3, 1] @ part.handle_axis) < 1e-9  # fingers across the bar
+    # A horizontal drawer bar: the fingers open vertically; the door's vertical bar:
+    # horizontally.
+    assert abs(handle_grasps(cabinets["drawers_11"].part("link_1"))[0][2, 1]) == pytest.approx(1)
+    assert abs(handle_grasps(cabinets["mixed_17"].part("link_3"))[0][2, 1]) < 1e-9
+
+
+def test_grasps_follow_an_open_door_and_the_cabinet_frame(cabinets) -> None:
+    part = cabinets["mixed_17"].part("link_3")
+    T = np.eye(4)
+    T[:3, :3] = axis_angle(np.array([0.0, 0.0, 1.0]), np.pi)  # facing the robot
+    T[:3, 3] = (1.2, 0.1, 0.5)
+    for q in (0.0, 0.6):
+        gs = handle_grasps(part, q, T)
+        check_grasps(part, gs, q, T)
+
+
+def test_knob_grasps_offer_both_finger_directions(cabinets) -> None:
+    part = cabinets["doors_2"].part("link_1")
+    assert part.handle == "knob" and part.hinge == "right"
+    gs = handle_grasps(part)
+    check_grasps(part, gs)
+    assert len(gs) == 2 * (1 + len(PITCHES))
+    # First along the line from the hinge to the free edge (vertical fingers on a side
+    # door), then the other way.
+    assert abs(gs[0][2, 1]) == pytest.approx(1.0)
+    assert abs(gs[1 + len(PITCHES)][2, 1]) < 1e-9
+
+
+def test_a_flat_front_has_no_grasp_and_flips_keep_the_grasp(cabinets) -> None:
+    assert all(handle_grasps(p) == [] for p in cabinets["doors_7"].movable_parts)
+    g = handle_grasps(cabinets["drawers_11"].part("link_1"))[0]
+    f = flip_fingers(g)
+    np.testing.assert_array_equal(f[:3, 0], g[:3, 0])
+    np.testing.assert_array_equal(f[:3, 1:3], -g[:3, 1:3])
+    np.testing.assert_array_equal(flip_fingers(f), g)
+    top = np.eye(4)
+    top[:3, :3] = axis_angle(np.array([0.0, 1.0, 0.0]), -np.pi / 2)  # its up: -approach
+    assert held_grasp(top) == "top" and held_grasp(np.eye(4)) == "side"
+
+
+def test_place_targets_are_inside_and_open_enough_is_the_targets_rule(cabinets) -> None:
+    spec = cabinets["drawers_11"]
+    T = np.eye(4)
+    t = place_target(spec, "link_1", 0.2, T)
+    assert t.grasp == "top" and t.lift == 0.0
+    assert inside(spec, "link_1", 0.2, T, t.p) and open_enough(spec, "link_1", 0.2, T)
+    assert not inside(spec, "link_1", 0.0, T, t.p)  # the drawer took it out with it
+    with pytest.raises(ConfigError, match=r"drawer link_1 is out -?0\.0\d\d m"):
+        place_target(spec, "link_1", 0.0, T)
+    assert not open_enough(spec, "link_1", 0.0, T)
+    door = cabinets["mixed_17"]
+    t = place_target(door, "link_5", 1.4, T)
+    assert t.grasp == "side" and t.lift >= 0.0
+    assert inside(door, "link_5", 1.4, T, t.p)
+    with pytest.raises(ConfigError, match="cell link_5 leaves"):
+        place_target(door, "link_5", 0.1, T)
+    with pytest.raises(UnknownNameError):
+        place_target(door, "link_99", 0.1, T)
+    assert not dragged(DRAG_LIMIT) and dragged(DRAG_LIMIT + 1e-6)

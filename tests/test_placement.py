@@ -1,0 +1,123 @@
+"""Where the base stands for a skill (:func:`strug_manip.control.placement.find_placement`):
+a reachable skill gets a placement whose joint paths do what the plan says, free of
+collisions; an absurd one gets ``SkillStop(ik_infeasible)`` with the reasons counted.
+
+Scene: ``models/cabinets/drawers_11`` (seed 11): the top drawer ``link_1``'s bar handle
+at (0.98, 0, 1.06) m, 0.215 m of travel.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from strug_manip.control import ControlContext, OpenDrawer, SkillPlan, handle_grasps
+from strug_manip.control.driver import BASE_SPEED
+from strug_manip.control.outcome import SkillStop, Status
+from strug_manip.control.placement import CANDIDATES, MAX_CANDIDATES, Placement, find_placement
+from strug_manip.control.plan import line_of, straight
+from strug_manip.objects.hypotheses import BelievedJoint
+from strug_manip.robot.fetch import ARM_TORSO_JOINTS, BASE_JOINTS, TUCK, speed_limits
+from strug_manip.world.scene import SceneConfig
+from strug_manip.world.sim import ManipulationWorld
+
+POS_TOL, ROT_TOL = 0.01, 0.05
+
+
+@pytest.fixture(scope="module")
+def world() -> ManipulationWorld:
+    w = ManipulationWorld(SceneConfig(cabinet_seed=11, cabinet_kinds=("drawer",)))
+    yield w
+    w.close()
+
+
+@pytest.fixture(scope="module")
+def ctx() -> ControlContext:
+    return ControlContext()
+
+
+def search(ctx, world, plan: SkillPlan, checked: bool = True) -> Placement:
+    checker = None
+    if checked:
+        checker = ctx.checker(world.model).load(world.data)
+        checker.attach(None)
+        checker.allow()
+    speeds = (speed_limits(ctx.ik.model), np.array(BASE_SPEED))
+    postures = (np.array(TUCK), np.array(TUCK))
+    return find_placement(plan, ctx.ik, ctx.wb_ik, np.zeros(3), postures, speeds, checker)
+
+
+def gripper_at(ctx, base: np.ndarray, q: np.ndarray) -> np.ndarray:
+    return ctx.ik.forward(
+        {**dict(zip(BASE_JOINTS, base.tolist(), strict=True)),
+         **dict(zip(ARM_TORSO_JOINTS, q.tolist(), strict=True))}
+    )  # fmt: skip
+
+
+def close(T: np.ndarray, goal: np.ndarray) -> bool:
+    angle = np.arccos(np.clip((np.trace(T[:3, :3].T @ goal[:3, :3]) - 1) / 2, -1, 1))
+    return bool(np.linalg.norm(T[:3, 3] - goal[:3, 3]) < POS_TOL and angle < ROT_TOL)
+
+
+def drawer_plan(world) -> SkillPlan:
+    part = world.scene.cabinet_spec.part("link_1")
+    T = world.scene.T_world_cabinet
+    skill = OpenDrawer(handle_grasps(part, 0.0, T)[0], BelievedJoint.of_part(part, 0.0, T))
+    return skill.plan(world)
+
+
+def test_a_reachable_skill_gets_a_placement_that_tracks_every_line(world, ctx) -> None:
+    world.reset()
+    plan = drawer_plan(world)
+    p = search(ctx, world, plan)
+    assert p.base.shape == (3,) and p.q_pre.shape == (len(ARM_TORSO_JOINTS),)
+    assert len(p.lines) == len(p.base_paths) == len(p.plan.lines) == len(plan.lines)
+    assert 1 <= p.tried <= 2 * MAX_CANDIDATES and p.seconds > 0
+    assert close(gripper_at(ctx, p.base, p.q_pre), p.plan.pre)
+    for k, line in enumerate(p.plan.lines):
+        qs = p.lines[k]
+        bases = p.base_paths[k] if p.base_paths[k] is not None else [p.start_of(k)[0]] * len(qs)
+        assert len(qs) == len(line.poses)
+        for q, b, T in zip(qs, bases, line.poses, strict=True):
+            assert close(gripper_at(ctx, np.asarray(b), q), T), (line.name, k)
+    # The robot stands free with its arm tucked there, and is free at the pre-grasp.
+    checker = ctx.checker(world.model).load(world.data)
+    checker.allow()
+    assert checker.free(np.concatenate([p.base, TUCK]))
+    assert checker.free(np.concatenate([p.base, p.q_pre]))
+    # It stands in front of the cabinet (+x ahead), facing it.
+    assert p.base[0] < 0.96 and abs(np.cos(p.base[2])) > 0.9 and np.cos(p.base[2]) > 0
+    # The same search again: the same placement (deterministic).
+    again = search(ctx, world, plan)
+    np.testing.assert_array_equal(again.base, p.base)
+    np.testing.assert_array_equal(again.q_pre, p.q_pre)
+
+
+def absurd(z: float) -> SkillPlan:
+    pre = np.eye(4)
+    pre[:3, 3] = (0.8, 0.0, z)
+    return SkillPlan("Reach", pre, ())
+
+
+def test_an_unreachable_pre_grasp_is_ik_infeasible(world, ctx) -> None:
+    """A pre-grasp 3 m above the floor: every candidate base (fingers either way) fails
+    its IK (the twin's kinematic search is the same search without the checker)."""
+    world.reset()
+    with pytest.raises(SkillStop) as stop:
+        search(ctx, world, absurd(3.0))
+    assert stop.value.status is Status.IK_INFEASIBLE and stop.value.phase == "plan"
+    n = 2 * min(MAX_CANDIDATES, len(CANDIDATES))
+    assert f"of {n} reaches" in stop.value.detail
+    assert f"pre-grasp unreachable: {n}" in stop.value.detail
+
+
+def test_an_unreachable_line_is_ik_infeasible(world, ctx) -> None:
+    """A reachable pre-grasp whose line goes 1.5 m up."""
+    world.reset()
+    pre = absurd(1.0).pre
+    up = line_of("lift", straight(pre, np.array([0.0, 0.0, 1.5]), 0.02), 0.1)
+    with pytest.raises(SkillStop) as stop:
+        search(ctx, world, SkillPlan("Reach", pre, (up,)))
+    assert stop.value.status is Status.IK_INFEASIBLE
+    assert "lift line unreachable" in stop.value.detail
+    assert search(ctx, world, SkillPlan("Reach", pre, ())).lines == ()
