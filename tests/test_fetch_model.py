@@ -108,18 +108,25 @@ def test_joints_actuators_sites(mj_model: mujoco.MjModel) -> None:
         mujoco.mjtJoint.mjJNT_SLIDE,
         mujoco.mjtJoint.mjJNT_HINGE,
     ]
+    pid = int(mujoco.mjtDyn.mjDYN_PID)
     for joint, act in ACTUATORS.items():
         a = mj_model.actuator(act)
-        if joint in BASE_JOINTS:  # velocity servo: gain kv, bias -kv * qvel
-            assert a.gainprm[0] > 0 and a.biasprm[2] == -a.gainprm[0], act
-        elif joint in GRIPPER_JOINTS:  # one force-limited position servo on a tendon
+        if joint in GRIPPER_JOINTS:  # one force-limited position servo on a tendon
             assert a.trntype[0] == mujoco.mjtTrn.mjTRN_TENDON
             assert a.forcelimited[0] and a.forcerange[1] > 0
-        else:  # position servo, ctrlrange = joint range, force-limited
+        elif joint in HEAD_JOINTS:  # position servo, ctrlrange = joint range
             assert a.gainprm[0] > 0 and a.biasprm[1] == -a.gainprm[0], act
-            j = mj_model.joint(joint)
-            np.testing.assert_array_equal(a.ctrlrange, j.range, err_msg=act)
-            assert a.forcelimited[0], act
+            np.testing.assert_array_equal(a.ctrlrange, mj_model.joint(joint).range, err_msg=act)
+        else:  # base, torso, arm: PID position servo (kp, damping, integral with
+            # anti-windup), clamped at the effort limit; two controls (position, velocity)
+            assert int(a.dyntype[0]) == pid, act
+            # MuJoCo's PID layout: gain ki, bias (0, -kp, -kv), dynprm[0] the integral clamp.
+            assert a.gainprm[0] > 0 and a.biasprm[1] < 0 and a.biasprm[2] < 0, act
+            assert a.dynprm[0] > 0, act
+            assert a.forcelimited[0] and a.forcerange[1] > 0, act
+            if joint not in BASE_JOINTS:
+                j = mj_model.joint(joint)
+                np.testing.assert_array_equal(a.ctrlrange[0], j.range, err_msg=act)
     assert mj_model.site(GRIPPER_SITE).id >= 0
     assert mj_model.site(HEAD_CAMERA).id >= 0 and mj_model.camera(HEAD_CAMERA).id >= 0
 

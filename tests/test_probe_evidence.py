@@ -22,6 +22,7 @@ from strug_manip.control import ControlContext, PullH, handle_grasps
 from strug_manip.objects.generator import axis_angle
 from strug_manip.world import ManipulationWorld, SceneConfig
 from strug_manip.world.sim import depth_to_points
+from strug_manip.world.views import aim_head
 
 #: Depth change that marks a pixel as moved [m].
 CHANGED = 0.01
@@ -52,25 +53,27 @@ def probe_evidence(frames, part, T_world_cabinet) -> dict[str, float]:
     changed &= (before.depth > 0) & (after.depth > 0)
     assert changed.sum() > 50, "the probe moved nothing the camera sees"
     pts_b, pix_b = depth_to_points(before.depth, before.T_world_camera, before.fovy)
-    pts_a, pix_a = depth_to_points(after.depth, after.T_world_camera, after.fovy)
+    pts_a, _ = depth_to_points(after.depth, after.T_world_camera, after.fovy)
     P = pts_b[changed.reshape(-1)[pix_b]]
     P = P[np.linspace(0, len(P) - 1, min(MAX_POINTS, len(P))).astype(int)]
     lo, hi = P.min(axis=0) - 0.15, P.max(axis=0) + 0.15
     Q = pts_a[np.all((pts_a > lo) & (pts_a < hi), axis=1)]
+    Q = Q[np.linspace(0, len(Q) - 1, min(4 * MAX_POINTS, len(Q))).astype(int)]
     R, t = T_world_cabinet[:3, :3], T_world_cabinet[:3, 3]
     normal = R @ np.array([1.0, 0.0, 0.0])
-    drawer = min(_score(P + s * normal, Q) for s in np.linspace(0.0, 0.10, 21))
+    drawer = min(_score(P + s * normal, Q) for s in np.linspace(0.0, 0.10, 11))
     c, (w, h) = part.cell_center, part.cell_size
-    edges = [  # (point on the hinge line, axis), cabinet frame
-        (c + [0, -w / 2, 0], np.array([0.0, 0.0, 1.0])),
-        (c + [0, w / 2, 0], np.array([0.0, 0.0, 1.0])),
-        (c + [0, 0, -h / 2], np.array([0.0, 1.0, 0.0])),
-        (c + [0, 0, h / 2], np.array([0.0, 1.0, 0.0])),
+    up, side = np.array([0.0, 0.0, 1.0]), np.array([0.0, 1.0, 0.0])
+    edges = [  # (a point on the hinge line, its axis), cabinet frame
+        (c - 0.5 * w * side, up),
+        (c + 0.5 * w * side, up),
+        (c - 0.5 * h * up, side),
+        (c + 0.5 * h * up, side),
     ]
     door = np.inf
     for o, a in edges:
         ow, aw = R @ o + t, R @ a
-        for th in np.linspace(-0.4, 0.4, 33):
+        for th in np.linspace(-0.4, 0.4, 17):
             Rh = axis_angle(aw, th)
             door = min(door, _score((P - ow) @ Rh.T + ow, Q))
     return {"drawer": drawer, "door": door}
@@ -92,6 +95,8 @@ def test_point_cloud_after_pull_h_tells_drawer_from_door(ctx, seed: int, kind: s
         for p in spec.movable_parts
         if p.handle != "none" and (kind == "drawer" or abs(p.axis[2]) > 0.7)
     )
+    # The head looks at the part's handle (the robot stands where it starts).
+    aim_head(world, part.handle_at(0.0, T))
     robot0 = world.robot_qpos()
     before = world.render()
     out = None

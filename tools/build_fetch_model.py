@@ -672,9 +672,11 @@ def write_mjcf(base: Body, meshes: dict[str, str], header: str) -> str:
 
     keyframe = _sub(root, "keyframe")
     qpos = [HOME[n] for n in _joint_names(base)]
+    # The PID servos take two controls each (position and velocity targets: MuJoCo 4),
+    # the gripper and head servos one.
     ctrl = (
-        [0.0, 0.0, 0.0]
-        + [HOME[j] for j in ("torso_lift_joint", *ARM_JOINTS)]
+        [v for _ in range(3) for v in (0.0, 0.0)]
+        + [v for j in ("torso_lift_joint", *ARM_JOINTS) for v in (HOME[j], 0.0)]
         + [GRIPPER_OPEN]
         + [HOME[j] for j in HEAD_JOINTS]
     )

@@ -13,7 +13,8 @@ movable part with a handle (a flat front cannot be grasped):
   for a door or flap; the grasps of :func:`handle_grasps` in turn until one is not
   ``ik_infeasible``): a success is a run that ends ``ok``, with the part open enough
   for the object (:func:`~strug_manip.domains.manipulation.rules.open_enough`) and
-  the cabinet not dragged; failures are counted by cause;
+  the cabinet not dragged (a part whose cell cannot take the object even open to its
+  limit: moved 90 % of the skill's travel); failures are counted by cause;
 - the **chain** from there when it opened: Pick (with the grasp the part's target
   needs) then Place into the drawer / behind the door; a success is the object resting
   inside the part (:func:`~strug_manip.domains.manipulation.rules.inside`);
@@ -69,6 +70,7 @@ from strug_manip.control import (
     handle_grasps,
     place_target,
 )
+from strug_manip.control.params import DEFAULT_PARAMS
 from strug_manip.domains.manipulation.rules import dragged, inside, open_enough
 from strug_manip.objects.hypotheses import BelievedJoint, believed_spec, cell_joints, model_of
 from strug_manip.world import ManipulationWorld, SceneConfig
@@ -137,6 +139,15 @@ def simulate_twice(twin, skill, plan_world=None) -> tuple[Outcome, float]:
     return outs[1], outs[0].wall_seconds
 
 
+def commanded(skill) -> float:
+    """How far the opening ``skill`` moves its part [m or rad]: its amount (or default),
+    capped before the believed limit, as its plan does."""
+    p = DEFAULT_PARAMS
+    want = skill.default_amount(p) if skill.amount is None else skill.amount
+    prismatic = skill.joint.type == "prismatic"
+    return min(want, skill.joint.limit - (p.limit_margin_m if prismatic else p.limit_margin_rad))
+
+
 def compare(full: Outcome, twin: Outcome, cold: float, joint: str, unit: str) -> dict:
     """The twin's agreement with the full robot on one run (``cold``: the twin's wall
     time with an empty placement cache [s])."""
@@ -174,12 +185,19 @@ def evaluate_part(world, twin, spec, part, ctx) -> dict:
     T_now = world.body_pose(world.scene.cabinet_prefix + world.scene.cabinet.root)
     moved_away = dragged(out.cabinet_displacement)
     wide = open_enough(spec, part.link, q, T_now)
-    ok = out.ok and wide and not moved_away
+    # A cell that cannot take the object even with its part at the limit (too low,
+    # too narrow) counts as opened when the part reached 90 % of the skill's travel.
+    room = open_enough(spec, part.link, part.upper, T)
+    target = commanded(skill)
+    reached = abs(out.motion_of(joint_name)) >= 0.9 * abs(target)
+    ok = out.ok and not moved_away and (wide if room else reached)
     cause = (
         "ok" if ok else str(out.status) if not out.ok else "dragged" if moved_away else "too little"
     )
     rec["open"] = {
         "ok": bool(ok),
+        "room": bool(room),
+        "wide": bool(wide),
         "cause": cause,
         "motion": out.motion_of(joint_name),
         "wall": out.wall_seconds,
@@ -188,7 +206,7 @@ def evaluate_part(world, twin, spec, part, ctx) -> dict:
     }
     twins = []
     twins.append(compare(out, *simulate_twice(twin, skill), joint_name, unit))
-    if ok:
+    if ok and wide:
         tgt = place_target(spec, part.link, q, T_now)
         pick = Pick("object", tgt.grasp).run(world, ctx=ctx)
         chain = {"pick": str(pick.status), "place": None, "ok": False}
@@ -318,7 +336,9 @@ def rate(flags: list[bool]) -> dict:
 def summary(records: list[dict]) -> dict:
     """The figures, as one JSON-able object:
 
-    - ``open_drawer``, ``open_door``, ``open_flap``: ``{"n", "ok", "causes", "median_wall_s"}``;
+    - ``open_drawer``, ``open_door``, ``open_flap``: ``{"n", "ok", "no_room", "causes",
+      "median_wall_s"}`` (``no_room``: parts whose cell cannot take the object even
+      open to the limit; they count as opened when they reach 90 % of the travel);
     - ``wrong_model``: ``{"n", "ok"}`` (runs that did not drag the cabinet), ``"dragged"``
       (single pulls past 0.1 m, ``{"n", "ok"}`` with ``ok`` the dragged ones),
       ``"dragged_after_4"`` and ``"sequences"`` (sequences of four wrong pulls past
@@ -339,6 +359,7 @@ def summary(records: list[dict]) -> dict:
         ps = [p for p in parts if p["category"] == cat]
         out[cat] = {
             **rate([p["open"]["ok"] for p in ps]),
+            "no_room": int(sum(not p["open"].get("room", True) for p in ps)),
             "causes": dict(Counter(p["open"]["cause"] for p in ps)),
             "median_wall_s": statistics.median([p["open"]["wall"] for p in ps]) if ps else None,
         }

@@ -16,7 +16,8 @@ MuJoCo physics stepping all along (:class:`~strug_manip.control.driver.JointDriv
 4. **phases**: each line followed (its IK path, the base along where it is a whole-body
    line), each grip closed or opened; while a line runs, a lost grasp (fingers closed
    on nothing) or the gripper more than ``tracking_tolerance`` behind its commanded
-   pose (the arm is blocked) stops the run;
+   pose (the arm is blocked) stops the run; the robot then *recovers*: lets go (unless
+   it carries the object), backs off and stows, so that the next skill can start;
 5. **stow**: back to the tuck (holding the object: to its carry posture), so the next
    skill may drive and the head camera sees the cabinet past the arm; planned with the
    rest before anything moves (:func:`plan_stow`: from where the last line ends, the
@@ -46,7 +47,7 @@ from strug_manip.control.navigation import plan_route
 from strug_manip.control.outcome import Outcome, SkillStop, Status
 from strug_manip.control.params import DEFAULT_PARAMS, SkillParams
 from strug_manip.control.placement import Placement, find_placement
-from strug_manip.control.plan import Grip, Line, SkillPlan
+from strug_manip.control.plan import Grip, Line, SkillPlan, retreat_poses
 from strug_manip.robot.fetch import (
     ARM_TORSO_JOINTS,
     BASE_JOINTS,
@@ -170,6 +171,12 @@ def plan_stow(
     raise SkillStop(Status.NO_MOTION_PLAN, f"{res.reason}: {res.detail}", "stow")
 
 
+def recovery_poses(T_world_gripper: np.ndarray, params: SkillParams) -> tuple[np.ndarray, float]:
+    """The straight back-off after a stop: ``retreat_distance`` against the gripper's
+    approach from ``T_world_gripper`` (4, 4): ``(poses (N, 4, 4), length [m])``."""
+    return retreat_poses(T_world_gripper, params.retreat_distance, params.line_step)
+
+
 def _release_pose(plan: SkillPlan) -> np.ndarray:
     """``T_world_gripper`` (4, 4) where ``plan`` opens its fingers (the end of the line
     before the opening grip)."""
@@ -231,6 +238,9 @@ class FullRobot:
         cab0 = self.world.cabinet_displacement_vector()
         phase = "plan"
         try:
+            # Whether this skill carries the object (a stop keeps holding it then).
+            self._carrier = plan.carrying is not None or ends_holding(plan)
+            self._plan = plan
             placement, free = self._plan_free(plan)
             plan = placement.plan  # the fingers may be swapped
             phase = "reach"
@@ -252,10 +262,48 @@ class FullRobot:
                 self.drv.hold(self.params.settle_time)
             self._key("end")
         except SkillStop as stop:
+            detail = stop.detail
+            if phase not in ("plan", "reach"):  # the hand is at the part: let go, back off
+                detail += self._recover()
             return self._outcome(
-                plan, stop.status, stop.detail, stop.phase or phase, parts0, cab0, t_wall
+                plan, stop.status, detail, stop.phase or phase, parts0, cab0, t_wall
             )
         return self._outcome(plan, Status.OK, "", "", parts0, cab0, t_wall)
+
+    def _recover(self) -> str:
+        """After a stop at the part: open the fingers (a skill that carries the object
+        and still holds it keeps it), back the gripper off along its approach
+        (:func:`recovery_poses`, IK from where the arm is), then stow (OMPL), so that the
+        next skill starts from the drive posture. Returns "" or what failed (the run's
+        status stays the stop's)."""
+        p = self.params
+        # Hold where the arm and base stopped, not their old commands.
+        self.drv.arm_cmd, self.drv.base_target = self.drv.q, self.drv.base
+        carrying = self._carried() if self._holding() and self._carrier else None
+        if carrying is None:
+            self.drv.grip(False, p.grip_time, GRIPPER_SQUEEZE)
+        start = self._command()
+        T0 = self.world.site_pose(GRIPPER_SITE)
+        poses, length = recovery_poses(T0, p)
+        track = self.ctx.ik.track(poses, start)
+        backs_off = track.success
+        if backs_off:  # checked like every executed path (the hand may touch the part)
+            checker = self._checker(carrying)
+            checker.allow(checker.hand_with([checker.body_id(b) for b in self._touched()]))
+            base = self.drv.base
+            backs_off = not checker.path([np.concatenate([base, q]) for q in track.q])
+            checker.allow()
+        if backs_off:
+            self.drv.follow(list(track.q), max(0.3, length / p.retreat_speed))
+            self.drv.hold(p.settle_time)
+        goal = self._drive_posture(carrying)
+        try:
+            path = self._plan_arm(self.drv.q, goal, carrying, phase="recovery")
+        except SkillStop as stop:
+            return f"; recovery: the arm stays out ({stop.detail})"
+        self.drv.follow(list(path), 0.3)
+        self.drv.hold(p.settle_time)
+        return "" if backs_off else "; recovery: no free IK path to back off, stowed from there"
 
     # -- planning ------------------------------------------------------------------------
     def _sync(self) -> ManipulationWorld:
@@ -407,6 +455,15 @@ class FullRobot:
         carry posture."""
         return np.array(TUCK if carrying is None else CARRY[held_grasp(carrying[1])])
 
+    def _touched(self) -> list[str]:
+        """The bodies the current skill's lines may touch (its part, the object)."""
+        return sorted({b for line in self._plan.lines for b in line.touch})
+
+    def _carried(self) -> tuple[str, np.ndarray]:
+        """The held object and ``T_gripper_object`` now."""
+        T_wg = self.world.site_pose(GRIPPER_SITE)
+        return "object", np.linalg.inv(T_wg) @ self.world.object_pose()
+
     def _line(self, line: Line, placement: Placement, k: int) -> None:
         """Follow line ``k`` of the placement, monitoring the grasp and the tracking."""
         seconds = max(0.3, line.length / line.speed)
@@ -429,6 +486,8 @@ class FullRobot:
         tendon = m.tendon("gripper").id
         site = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, GRIPPER_SITE)
         tol = self.params.free_tolerance if line is None else self.params.tracking_tolerance
+        if line is not None and line.tolerance is not None:
+            tol = line.tolerance
         name = "free motion" if line is None else line.name
 
         def monitor(_: float) -> None:

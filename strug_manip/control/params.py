@@ -27,7 +27,10 @@ class SkillParams:
         line_step: spacing of the poses of a Cartesian line [m] (arcs: this arc
             length at the gripper): a few IK iterations each, smooth enough for the
             position servos.
-        approach_speed: TCP speed of approaches and retreats [m/s] (slow: contact).
+        approach_speed: TCP speed of approaches [m/s] (slow: contact comes).
+        retreat_speed: TCP speed of retreats and withdrawals after a release [m/s]:
+            the open fingers leave the handle they straddle; faster than an approach,
+            as slow as a hand backing away from furniture.
         open_speed: TCP speed of opening motions [m/s]: a household pace that the arm
             follows with its speed limits at 70 %.
         probe_speed: TCP speed of the probing motions [m/s].
@@ -41,8 +44,11 @@ class SkillParams:
         flap_angle: how far OpenDoor lifts a top-hinged flap by default [rad] (their
             limits are 1.20-1.57 rad): high enough to carry the object in under it.
         drop_angle: how far OpenDoor lowers a bottom-hinged (drop-down) flap by default
-            [rad]: as far as it goes (capped before the limit), so the open flap lies
-            nearly flat and the arm reaches over it.
+            [rad]: as far as it goes (capped before the limit): the object is carried
+            in over the open flap's edge, which a low cell leaves little room for.
+        flap_wrist_share: on a flap with a bar handle the gripper turns by this share of
+            the flap's angle, the bar rolling between the finger pads for the rest [-]
+            (a round bar rolls under the squeeze: the flap's weight alone turns it).
         limit_margin_m, limit_margin_rad: an opening stops this short of the believed
             joint limit [m], [rad], so it never drives the part into its stop.
         probe_distance: how far Push, PullV and PullH move the gripper [m]: enough to
@@ -62,10 +68,16 @@ class SkillParams:
         tracking_tolerance: the gripper more than this behind its commanded pose along a
             line means the arm is blocked (status ``collision``) [m]: beyond the arm's
             compliance under its effort limits at line speeds (a few centimetres).
+        probe_tolerance: the same for the probing lines [m]: half the probe's travel,
+            so that a probe against a part that does not move that way (a closed
+            drawer pushed in, a door pulled up) reports ``collision``; the arm lags
+            well under a centimetre at probe speed.
         free_tolerance: the same for free motions [m]: there a fast arm lags a few
             centimetres behind its command, and only a blocked one falls far behind.
         time_budget: simulated time budget of one skill [s].
-        plan_timeout: OMPL time budget per arm motion and planner [s] (wall).
+        plan_timeout: OMPL time budget per arm motion and planner [s] (wall): an arm
+            reaching into a low drawer with the object is a narrow passage that
+            LBKPIECE1 finds in one to two seconds.
         drive_tolerance: the base is driven only to targets farther than this [m].
         record_period: trajectory recording period [s].
     """
@@ -74,6 +86,7 @@ class SkillParams:
     pick_offset: float = 0.12
     line_step: float = 0.02
     approach_speed: float = 0.15
+    retreat_speed: float = 0.25
     open_speed: float = 0.2
     probe_speed: float = 0.1
     grip_time: float = 0.25
@@ -82,6 +95,7 @@ class SkillParams:
     door_angle: float = 1.40
     flap_angle: float = 1.30
     drop_angle: float = 1.57
+    flap_wrist_share: float = 0.5
     limit_margin_m: float = 0.02
     limit_margin_rad: float = 0.05
     probe_distance: float = 0.04
@@ -92,9 +106,10 @@ class SkillParams:
     insert_clearance: float = 0.2
     place_drop: float = 0.005
     tracking_tolerance: float = 0.08
+    probe_tolerance: float = 0.02
     free_tolerance: float = 0.2
     time_budget: float = 60.0
-    plan_timeout: float = 1.0
+    plan_timeout: float = 2.0
     drive_tolerance: float = 0.02
     record_period: float = 0.02
 

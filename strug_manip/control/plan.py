@@ -42,6 +42,9 @@ class Line:
         part_joint: the believed joint that moves with the gripper (planning checks
             move it along), or None.
         part_q: that joint's believed positions at the poses, shape (N,) [m or rad].
+        tolerance: the gripper this far behind its command means the arm is blocked
+            [m] (None: the skills' ``tracking_tolerance``; a probe's is smaller than its
+            travel, so that a blocked probe says so).
     """
 
     name: str
@@ -52,6 +55,7 @@ class Line:
     holding: bool = False
     part_joint: str | None = None
     part_q: np.ndarray | None = None
+    tolerance: float | None = None
 
 
 @dataclass(frozen=True)

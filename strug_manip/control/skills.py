@@ -73,6 +73,8 @@ from strug_manip.world.sim import ManipulationWorld
 OBJECTS: tuple[str, ...] = ("object",)
 #: A handle is "at" g when its grasp point is this close to g's position [m].
 HANDLE_RADIUS = 0.05
+#: The carcass link of the generated cabinets (PartNet's ``link_0``).
+CARCASS = "link_0"
 #: Grasps of :class:`Pick`.
 GRASPS: tuple[str, ...] = ("top", "side")
 
@@ -211,12 +213,19 @@ def _grasp_and_move(
     body = world.scene.cabinet_prefix + link
     pre, approach = _approach(g, body, p)
     touch = frozenset({body})
-    moving = line_of(name, poses, speed, touch=touch, holding=True, part_joint=joint, part_q=part_q)
+    tol = p.probe_tolerance if name == "probe" else None
+    # A probe presses wherever the part lets it (a push into a closed front): the hand
+    # may touch the carcass around the part too.
+    probe_touch = touch | {world.scene.cabinet_prefix + CARCASS} if name == "probe" else touch
+    moving = line_of(
+        name, poses, speed, touch=probe_touch, holding=True, part_joint=joint, part_q=part_q,
+        tolerance=tol,
+    )  # fmt: skip
     end = moving.poses[-1]
     q_end = None if part_q is None else np.full(1, part_q[-1])
     back = retreat_poses(end, p.retreat_distance, p.line_step)
     retreat = line_of(
-        "retreat", back, p.approach_speed, touch=touch, part_joint=joint,
+        "retreat", back, p.retreat_speed, touch=probe_touch, part_joint=joint,
         part_q=None if q_end is None else np.repeat(q_end, len(back[0])),
     )  # fmt: skip
     phases = (approach, Grip(True), moving, Grip(False), retreat)
@@ -226,7 +235,7 @@ def _grasp_and_move(
         start = retreat.poses[-1]
         steps = straight(start, p.withdraw_distance * away / np.linalg.norm(away), p.line_step)
         withdraw = line_of(
-            "withdraw", steps, p.approach_speed, part_joint=joint,
+            "withdraw", steps, p.retreat_speed, part_joint=joint,
             part_q=None if q_end is None else np.repeat(q_end, len(steps[0])),
         )  # fmt: skip
         phases = (*phases, withdraw)
@@ -262,15 +271,34 @@ class _Opening(Skill):
                 f"{'m' if prismatic else 'rad'} left, less than the margin {margin}"
             )
         radius = 1.0
+        move = self.joint.move
         if not prismatic:
             radius = float(np.linalg.norm(np.cross(self.joint.axis, g[:3, 3] - self.joint.origin)))
-        poses = along(self.joint.move, g, amount, max(radius, 1e-3), params.line_step)
+            link = part_at(world, g)[0]
+            part = world.scene.cabinet_spec.part(link)
+            flap = abs(self.joint.axis[2]) < 0.3
+            if flap and part.handle == "bar":
+                move = _rolling(self.joint, params.flap_wrist_share)
+        poses = along(move, g, amount, max(radius, 1e-3), params.line_step)
         q0 = part_at(world, g)[2]
         n = len(poses[0])
         part_q = q0 + amount * np.arange(1, n + 1) / n
         return _grasp_and_move(
             self.name, world, g, poses, params.open_speed, "move", part_q, params
         )
+
+
+def _rolling(joint: BelievedJoint, share: float):
+    """A flap's swing with its bar rolling in the fingers: the TCP follows the handle's
+    arc while the gripper turns by only ``share`` of the flap's angle (the wrist cannot
+    follow a drop-down flap that turns the handle down by 70-90 degrees)."""
+
+    def move(T: np.ndarray, q: float) -> np.ndarray:
+        out = joint.move(T, share * q)
+        out[:3, 3] = joint.move(T, q)[:3, 3]
+        return out
+
+    return move
 
 
 @dataclass(frozen=True)
@@ -486,7 +514,7 @@ class Place(Skill):
         back = -d if top else -g[:3, 0]
         retreat = line_of(
             "retreat", straight(g, clearance * back, params.line_step),
-            params.approach_speed, touch=touch,
+            params.retreat_speed, touch=touch,
         )  # fmt: skip
         phases = (*lines, Grip(False), retreat)
         return SkillPlan(self.name, pre, phases, carrying=(self.o, T_go))

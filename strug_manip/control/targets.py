@@ -12,7 +12,8 @@
 - a **cell** (behind an open door, or an open shelf): carried in level from the front
   (``side`` grasp), resting on the cell's floor :data:`INSERT` behind the front; it
   comes in from as high above its place as the cell's opening leaves room for (up to
-  :data:`MAX_LIFT`), over the cell's front edge and an open drop-down flap.
+  :data:`MAX_LIFT`), over the cell's front edge and an open drop-down flap (whose
+  edge it must clear: a flap opened too little leaves no way in).
 
 Poses are ``T_world_object`` of the object's box (its x: the 0.10 m side, y: the
 0.06 m side the fingers close across, z up). Raises :class:`~planners.errors.ConfigError`
@@ -88,7 +89,7 @@ def _cell_place(
     y_lo, y_hi = center[1] - size[1] / 2, center[1] + size[1] / 2
     top = center[2] + size[2] / 2
     lift_ok = True
-    drop = pitch = 0.0
+    drop = pitch = edge = 0.0
     if part.joint_type == "revolute" and part.hinge is not None:
         panel = part.geoms[0].size  # (thickness, width, height) of the door's panel
         t = float(panel[0])
@@ -103,6 +104,7 @@ def _cell_place(
             lift_ok = False
         else:  # a drop-down flap: the wrist, out over it, must stay above its panel
             drop, pitch = FLAP_DROP, FLAP_PITCH
+            edge = float(panel[2]) * max(np.cos(q), 0.0) + t  # its edge above the floor
     width, height = y_hi - y_lo, top - floor
     need = (2 * half[0] + INSERT, FINGER_SPAN + 2 * CLEARANCE, HELD_HEIGHT + CLEARANCE)
     if size[0] < need[0] or width < need[1] or height < need[2]:
@@ -112,6 +114,11 @@ def _cell_place(
             f"needs {need[0]:.3f} x {need[1]:.3f} x {need[2]:.3f} m"
         )
     lift = float(np.clip(height - HELD_HEIGHT - CLEARANCE, 0.0, MAX_LIFT)) if lift_ok else 0.0
+    if part.hinge == "bottom" and part.joint_type == "revolute" and lift + drop < edge + CLEARANCE:
+        raise ConfigError(
+            f"flap {link} at {q:.3f} rad stands {edge:.3f} m over its cell's floor: the "
+            f"object carried in at most {lift + drop:.3f} m high does not pass over it"
+        )
     center = np.array([front - INSERT, 0.5 * (y_lo + y_hi), floor + half[2] + drop])
     return center, lift, pitch
 

@@ -45,7 +45,7 @@ from planners.errors import ConfigError
 from strug_manip.control import timing
 from strug_manip.control.contacts import HAND_BODIES
 from strug_manip.control.context import ControlContext
-from strug_manip.control.execution import STOW_SEED, ends_holding, plan_stow
+from strug_manip.control.execution import STOW_SEED, ends_holding, plan_stow, recovery_poses
 from strug_manip.control.grasps import held_grasp
 from strug_manip.control.outcome import Outcome, SkillStop, Status
 from strug_manip.control.params import DEFAULT_PARAMS, SkillParams
@@ -69,20 +69,20 @@ from strug_manip.world.floating_gripper import BALL, INTEGRAL_TIME, SLIDES, TRAN
 from strug_manip.world.scene import SceneConfig
 from strug_manip.world.sim import ManipulationWorld, WorldState
 
-#: The twin's physics step [s]: twice the full robot's; the stiff contacts and joint
-#: stops (a 4 ms time constant) soften to MuJoCo's floor of two steps, and the twin still
-#: agrees with the full robot (``tools/eval_skills.py`` measures it).
-TIMESTEP = 0.004
+#: The twin's physics step [s]: 2.5 times the full robot's; the stiff contacts and
+#: joint stops (a 4 ms time constant) soften to MuJoCo's floor of two steps, and the
+#: twin still agrees with the full robot (``tools/eval_skills.py`` measures it).
+TIMESTEP = 0.005
 #: After its last release the hand leaves the scene (its geoms stop colliding: the full
 #: robot backs away and stows) and the cabinet and object settle for this long [s].
-COAST_TIME = 0.3
+COAST_TIME = 0.25
 #: The hand follows the full robot's stow until it is this far from the cabinet's box
 #: for good [m] (the fingers reach 0.1 m past the TCP; the arm's links, which the twin
 #: does not have, seldom sweep the cabinet where the hand does not).
-STOW_CLEARANCE = 0.15
+STOW_CLEARANCE = 0.1
 #: Room in front of the cabinet that its open parts take (a drawer pulled out, a door
 #: swung open) [m].
-FRONT_ROOM = 0.35
+FRONT_ROOM = 0.3
 #: Where the TCP (the ``gripper`` site) is in the hand's frame [m] (fetch.xml).
 TCP_OFFSET = 0.02
 #: Bounds of the hand's force [N] and torque [N m] limits: at least what a wrist can
@@ -123,6 +123,8 @@ class PlanningTwin:
             base, cabinet_spec=spec, cabinet_folder=None, robot="gripper", timestep=TIMESTEP
         )
         self.world = ManipulationWorld(cfg)
+        # Bodies at rest (the cabinet and object while the hand is elsewhere) sleep.
+        self.world.model.opt.enableflags |= int(mujoco.mjtEnableBit.mjENBL_SLEEP)
         self._robot_config = dataclasses.replace(
             base, cabinet_spec=spec, cabinet_folder=None, robot="fetch"
         )
@@ -311,7 +313,8 @@ class PlanningTwin:
         p = self.params
         pos: list[np.ndarray] = []  # commanded TCP position and orientation, per step
         quat: list[np.ndarray] = []
-        grips, names, held, holds = [], [], [], []
+        grips, names, held, holds, tols = [], [], [], [], []
+        tol = p.tracking_tolerance
         here = (plan.pre[:3, 3], _quats(plan.pre[None, :3, :3])[0])
         grip = GRIPPER_SQUEEZE if plan.carrying is not None else GRIPPER_OPEN
         start = plan.pre
@@ -323,6 +326,7 @@ class PlanningTwin:
             names.append(np.full(len(ps), name))
             held.append(np.full(len(ps), holding))
             holds.append(np.full(len(ps), hold))
+            tols.append(np.full(len(ps), tol))
 
         def hold(seconds: float, name: str, holding: bool) -> None:
             n = max(1, round(seconds / dt))
@@ -335,6 +339,7 @@ class PlanningTwin:
         for ph in plan.phases:
             if isinstance(ph, Grip):
                 grip = GRIPPER_SQUEEZE if ph.closed else GRIPPER_OPEN
+                tol = p.tracking_tolerance
                 hold(p.grip_time, ph.name, False)
                 released = not ph.closed
                 continue
@@ -344,17 +349,20 @@ class PlanningTwin:
                 k += 1
                 continue
             ps, qs = _line_commands(ph, placement, k, here, self.vmax, dt)
+            tol = p.tracking_tolerance if ph.tolerance is None else ph.tolerance
             add(ps, qs, ph.name, False, ph.holding)
             here = (ps[-1], qs[-1])
-            hold(p.settle_time, ph.name, ph.holding)
+            if not released:  # after the release the hand backs away in free space:
+                hold(p.settle_time, ph.name, ph.holding)  # the arm's settling is moot
             k += 1
         if stow is not None and len(stow[0]):  # the hand follows the stow out of the way
+            tol = p.free_tolerance
             add(stow[0], stow[1], "stow", False, ends_holding(plan))
             here = (stow[0][-1], stow[1][-1])
         cat = np.concatenate
         coast = max(1, round(COAST_TIME / dt)) if released else 0
         return Program(plan, placement, cat(pos), cat(quat), cat(grips), cat(names), cat(held),
-                       cat(holds), start, coast)  # fmt: skip
+                       cat(holds), cat(tols), start, coast)  # fmt: skip
 
     def _stow_commands(
         self, placement: Placement, plan_world: ManipulationWorld | None
@@ -408,16 +416,52 @@ class PlanningTwin:
 
     def controls(self, prog: Program) -> np.ndarray:
         """The twin's control vectors at every step of ``prog``, (nstep, nu)."""
+        return self._controls(prog.pos, prog.quat, prog.grip, prog.holds)
+
+    def recovery(self, prog: Program, state: np.ndarray) -> np.ndarray:
+        """The controls (nstep, nu) of the full robot's recovery after a stop in
+        ``state`` (a rollout state): the hand holds where it is while the fingers open
+        (a skill that carries the object and holds it keeps it), then backs off along
+        its approach (:func:`~strug_manip.control.execution.recovery_poses`) and
+        settles."""
+        m, p = self.world.model, self.params
+        dt = m.opt.timestep
+        qpos = state[1 : 1 + m.nq]
+        quat = qpos[self._ball_adr : self._ball_adr + 4].copy()
+        T = np.eye(4)
+        mujoco.mju_quat2Mat(T[:3, :3].reshape(9), quat)
+        T[:3, 3] = qpos[self._slide_adr] + TCP_OFFSET * T[:3, 0]
+        fingers = 0.5 * (qpos[self._fingers[0]] + qpos[self._fingers[1]])
+        carrier = prog.plan.carrying is not None or ends_holding(prog.plan)
+        keep = carrier and fingers > FINGERS_EMPTY and self.grip_cmd_at_stop == GRIPPER_SQUEEZE
+        grip = GRIPPER_SQUEEZE if keep else GRIPPER_OPEN
+        self._recovery_grip = grip
+        n_grip = 0 if keep else max(1, round(p.grip_time / dt))
+        poses, length = recovery_poses(T, p)
+        seconds = max(0.3, length / p.retreat_speed)
+        pts = np.vstack([T[:3, 3], poses[:, :3, 3]])
+        back = timing.samples(pts, seconds, dt)
+        n_settle = max(1, round(p.settle_time / dt))
+        pos = np.vstack([np.repeat(T[None, :3, 3], n_grip, axis=0), back,
+                         np.repeat(back[-1:], n_settle, axis=0)])  # fmt: skip
+        holds = np.ones(len(pos), dtype=bool)
+        holds[n_grip : n_grip + len(back)] = False
+        return self._controls(pos, np.repeat(quat[None], len(pos), axis=0),
+                              np.full(len(pos), grip), holds)  # fmt: skip
+
+    def _controls(
+        self, pos: np.ndarray, quat: np.ndarray, grip: np.ndarray, holds: np.ndarray
+    ) -> np.ndarray:
         dt = self.world.model.opt.timestep
-        origin = prog.pos - TCP_OFFSET * _x_axes(prog.quat)
+        origin = pos - TCP_OFFSET * _x_axes(quat)
         vel = np.zeros_like(origin)
         vel[1:] = np.diff(origin, axis=0) / dt
-        vel[prog.holds] = 0.0
+        vel[holds] = 0.0
         ctrl = np.repeat(self.world.data.ctrl[None].copy(), len(origin), axis=0)
         ctrl[:, self._slide_ctrl] = origin
         ctrl[:, self._slide_ctrl + 1] = vel
-        ctrl[:, self._rot_ctrl : self._rot_ctrl + 4] = prog.quat
-        ctrl[:, self._grip_ctrl] = prog.grip
+        ctrl[:, self._rot_ctrl : self._rot_ctrl + 4] = quat
+        ctrl[:, self._grip_ctrl] = grip
         return ctrl
 
     def judge(self, prog: Program, states: np.ndarray) -> tuple[int, Status, str, str]:
@@ -437,7 +481,7 @@ class PlanningTwin:
         check[np.flatnonzero(np.diff(prog.names != np.roll(prog.names, -1)))] = True
         check[-1] = True
         lost = check & prog.held & (fingers < FINGERS_EMPTY)
-        blocked = check & (lag > self.params.tracking_tolerance)
+        blocked = check & (lag > prog.tol)
         blocked &= ~prog.holds | np.r_[prog.holds[1:] != prog.holds[:-1], False]
         for k in range(len(lag)):
             if lost[k]:
@@ -465,8 +509,8 @@ class PlanningTwin:
         t_wall: float,
         physics: float,
     ) -> Outcome:
-        """Set the twin to where the run stopped (after the coast if it ran to its end)
-        and report it."""
+        """Set the twin to where the run ended (after the recovery that follows a stop, and
+        the coast) and report it."""
         w, m = self.world, self.world.model
         k, status, detail, phase = judged
         parts0, cab0 = self._before
@@ -475,10 +519,13 @@ class PlanningTwin:
             k = len(states) - 1
         mujoco.mj_setState(m, w.data, states[k], _ROLLOUT_STATE)
         mujoco.mj_forward(m, w.data)
-        self.grip_cmd = float(prog.grip[min(k, len(prog.grip) - 1)])
-        w.data.ctrl[self._grip_ctrl] = self.grip_cmd
         if status is Status.OK:
+            self.grip_cmd = float(prog.grip[-1])
             self.set_robot_base(prog.placement.start_of(len(prog.placement.lines))[0])
+        else:  # recovered where it stopped, the base where the skill placed it
+            self.grip_cmd = self._recovery_grip
+            self.set_robot_base(prog.placement.base)
+        w.data.ctrl[self._grip_ctrl] = self.grip_cmd
         every = max(1, round(self.params.record_period / m.opt.timestep))
         rows = states[: k + 1 : every, 1 : 1 + m.nq]
         times = states[: k + 1 : every, 0] - self.t0
@@ -619,6 +666,7 @@ class Program:
         names: the phase of every step, (nstep,).
         held: the fingers should hold something at that step (monitored), (nstep,).
         holds: the step belongs to a hold (settle or grip time), (nstep,).
+        tol: the tracking tolerance at that step [m], (nstep,).
         start: where the hand starts, (4, 4): the pre-grasp, or the grasp (the end of
             an approach, which is not simulated).
         coast: steps simulated after the last release with the hand out of the scene
@@ -633,6 +681,7 @@ class Program:
     names: np.ndarray
     held: np.ndarray
     holds: np.ndarray
+    tol: np.ndarray
     start: np.ndarray
     coast: int
 
@@ -702,21 +751,33 @@ def run_batch(
         )  # fmt: skip
         physics = (time.perf_counter() - t) / len(ts)
         judged = [tw.judge(p, st) for (_, p), tw, st in zip(members, ts, states, strict=True)]
-        coasting = [n for n, j in enumerate(judged) if j[1] is Status.OK and prog.coast]
+        # What follows the programs: after a stop the recovery, then (as after a last
+        # release) the coast with the hand out of the scene.
+        follow: dict[int, np.ndarray] = {}
+        for n, (j, tw, st) in enumerate(zip(judged, ts, states, strict=True)):
+            k, status = j[0], j[1]
+            if status is Status.OK:
+                if prog.coast:
+                    follow[n] = np.zeros((0, ctrl.shape[1]))
+                continue
+            tw.grip_cmd_at_stop = float(prog.grip[k])
+            follow[n] = tw.recovery(prog, st[k])
         tails: dict[int, np.ndarray] = {}
-        if coasting:
-            for n in coasting:
-                ts[n].ghost(True)
-            t = time.perf_counter()
-            tail, _ = rollout.rollout(
-                [ts[n].world.model for n in coasting], ts[0].world.data,
-                np.array([states[n][-1] for n in coasting]),
-                np.repeat(ctrl[-1:], prog.coast, axis=0)[None],
-            )  # fmt: skip
-            physics += (time.perf_counter() - t) / len(ts)
-            for n, tl in zip(coasting, tail, strict=True):
-                ts[n].ghost(False)
-                tails[n] = tl
+        t = time.perf_counter()
+        for n, extra in follow.items():
+            tw, k = ts[n], judged[n][0]
+            start = states[n][k]
+            if len(extra):  # the recovery, the hand in the scene
+                rec, _ = rollout.rollout(tw.world.model, tw.world.data, start[None], extra[None])
+                start, tails[n] = rec[0][-1], rec[0]
+            last = extra[-1:] if len(extra) else ctrl[k : k + 1]
+            tw.ghost(True)
+            coast = max(1, round(COAST_TIME / tw.world.model.opt.timestep))
+            tl, _ = rollout.rollout(tw.world.model, tw.world.data, start[None],
+                                    np.repeat(last, coast, axis=0)[None])  # fmt: skip
+            tw.ghost(False)
+            tails[n] = np.concatenate([tails[n], tl[0]]) if n in tails else tl[0]
+        physics += (time.perf_counter() - t) / len(ts)
         for n, ((i, p), tw, st) in enumerate(zip(members, ts, states, strict=True)):
             outs[i] = tw.finish(p, st, judged[n], tails.get(n), tw._t_wall, physics)
     return [o for o in outs if o is not None]

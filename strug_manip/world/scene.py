@@ -241,6 +241,9 @@ def build_scene(config: SceneConfig) -> SceneModel:
         cabinet = load_cabinet_spec(cab_spec)
     spec = mujoco.MjSpec.from_file(str(FETCH_SCENE_XML))
     home = dict(_home_by_name())
+    # The robot-only keyframe no longer fits once the scene changes: reset by name.
+    for key in list(spec.keys):
+        spec.delete(key)
     if config.robot == "gripper":
         _remove_robot(spec)
         add_floating_gripper(spec)
@@ -248,9 +251,6 @@ def build_scene(config: SceneConfig) -> SceneModel:
     spec.option.timestep = config.timestep
     spec.visual.global_.offwidth = max(config.width, 1280)
     spec.visual.global_.offheight = max(config.height, 960)
-    # The robot-only keyframe no longer fits once objects add coordinates: reset by name.
-    for key in list(spec.keys):
-        spec.delete(key)
     world = spec.worldbody
 
     table = world.add_body(name="table", pos=[*config.table_xy, 0.0])
@@ -301,20 +301,14 @@ def build_scene(config: SceneConfig) -> SceneModel:
         # Our cabinets' front plane is x = depth / 2; a loaded folder's is its bounds.
         front = cab_spec.depth / 2 if cab_spec is not None else float(cabinet.bounds[1, 0])
         x = config.cabinet_distance + STAND_SETBACK + front
-        # Its lowest point (the glides) on the table top, so the frame the scene reports
-        # is where the cabinet rests.
-        pos = [x, config.cabinet_lateral, config.stand_height - float(cabinet.bounds[0, 2])]
+        pos = [x, config.cabinet_lateral, config.stand_height]
         size = cabinet.bounds[1, :2] - cabinet.bounds[0, :2]
         _add_stand(
             world, config.cabinet_distance, config.cabinet_lateral, size, config.stand_height
         )
         friction = CABINET_FRICTION
     else:
-        pos = [
-            config.cabinet_distance + cabinet.bounds[1, 0],
-            config.cabinet_lateral,
-            -float(cabinet.bounds[0, 2]),
-        ]
+        pos = [config.cabinet_distance + cabinet.bounds[1, 0], config.cabinet_lateral, 0.0]
         friction = None
     add_to_spec(spec, cabinet, pos, yaw, free=True, prefix="cabinet/", base_friction=friction)
     eye = (-0.9, 1.5, 1.8)
@@ -333,5 +327,8 @@ def build_scene(config: SceneConfig) -> SceneModel:
     T[:3, :3] = np.array(
         [[math.cos(yaw), -math.sin(yaw), 0], [math.sin(yaw), math.cos(yaw), 0], [0, 0, 1]]
     )
+    # add_to_spec stands the cabinet's lowest point (the glides) on pos: its frame is
+    # that much higher.
     T[:3, 3] = pos
+    T[2, 3] -= float(cabinet.bounds[0, 2])
     return SceneModel(model, cabinet, cab_spec, home, "cabinet/", T)
