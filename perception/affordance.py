@@ -41,7 +41,13 @@ def grasp_frame(approach: np.ndarray, bar: np.ndarray) -> np.ndarray:
 
 
 def sample_grasps(
-    fused: FusedCabinet, part: int, n: int, rng: np.random.Generator, joint_type: str | None = None
+    fused: FusedCabinet,
+    part: int,
+    n: int,
+    rng: np.random.Generator,
+    joint_type: str | None = None,
+    sharpness: float = SHARPNESS,
+    floor: float = FLOOR,
 ) -> tuple[np.ndarray, np.ndarray]:
     """``n`` grasp poses on fused part ``part`` (module docstring).
 
@@ -50,6 +56,8 @@ def sample_grasps(
         n: number of poses; rng: the only randomness.
         joint_type: the believed type (default: the part's most probable), which sets the
             bar direction when no handle is seen.
+        sharpness, floor: the weights ``pull ** sharpness + floor`` (``sharpness=0``:
+            uniform over the part's pixels).
 
     Returns:
         ``(T_world_gripper (n, 4, 4), pull affordance of each grasp point (n,))``.
@@ -78,7 +86,7 @@ def sample_grasps(
         bar = front.dir_to_world([0.0, 0.0, 1.0])
     else:
         bar = front.dir_to_world([0.0, 1.0, 0.0])
-    w = pull**SHARPNESS + FLOOR
+    w = pull**sharpness + floor
     idx = rng.choice(len(pts), size=n, p=w / w.sum())
     R = grasp_frame(-normal, bar)
     T = np.tile(np.eye(4), (n, 1, 1))

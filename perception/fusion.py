@@ -241,6 +241,28 @@ def fit_front(
     return n, d, np.abs(off - d) < PLANE_TOL
 
 
+def _run(v: np.ndarray, bin_size: float = 0.01, max_gap: int = 3) -> tuple[float, float]:
+    """The extent of the contiguous run (gaps of at most ``max_gap`` empty bins) of the
+    values ``v`` [m] that holds their median: stray points (a table pixel called
+    carcass) outside the cabinet do not widen it."""
+    lo = float(v.min())
+    idx = ((v - lo) / bin_size).astype(int)
+    occupied = np.bincount(idx) > 0
+    k0 = k1 = int((np.median(v) - lo) / bin_size)
+    gap = 0
+    while k1 + 1 < len(occupied) and gap <= max_gap:
+        k1 += 1
+        gap = 0 if occupied[k1] else gap + 1
+    k1 -= gap
+    gap = 0
+    while k0 > 0 and gap <= max_gap:
+        k0 -= 1
+        gap = 0 if occupied[k0] else gap + 1
+    k0 += gap
+    inside = v[(idx >= k0) & (idx <= k1)]
+    return float(inside.min()), float(inside.max())
+
+
 def front_frame(views: Sequence[ViewParts]) -> FrontFrame:
     """The :class:`FrontFrame` from the cabinet points of every view."""
     seen = [v for v in views if v.sees_cabinet]
@@ -259,11 +281,13 @@ def front_frame(views: Sequence[ViewParts]) -> FrontFrame:
     R = np.stack([n, y, z], axis=1)
     local_y = pts @ y
     local_z = pts[:, 2]
-    y0, y1 = np.percentile(local_y[inl], [0.5, 99.5])
-    z_top = float(np.percentile(local_z[inl], 99.5))
-    z_bot = float(np.percentile(local_z, 0.5))
+    y0, y1 = _run(local_y[inl])
+    z0, z_top = _run(local_z[inl])
     behind = d - pts @ n
-    depth_seen = float(np.percentile(behind, 99.0))
+    body = (local_y > y0 - 0.02) & (local_y < y1 + 0.02) & (behind > -0.02) & (behind < 0.7)
+    body &= local_z < z_top + 0.02
+    z_bot, _ = _run(local_z[body]) if body.sum() > 20 else (z0, z_top)
+    depth_seen = float(np.percentile(behind[body], 99.0)) if body.sum() > 20 else 0.0
     seen_ok = depth_seen > 0.25
     T = np.eye(4)
     T[:3, :3] = R
@@ -436,7 +460,11 @@ def fuse(views: Sequence[ViewParts]) -> FusedCabinet:
         if v.sees_cabinet
         for inst in v.instances
     ]
-    # Handles to the front frame (world points were kept by the instances).
+    # A part lies on the cabinet's front: a reading mostly outside it is no part.
+    box = np.array(
+        [-0.5 * front.width - 0.05, 0.5 * front.width + 0.05, -0.05, front.height + 0.05]
+    )
+    readings = [r for r in readings if _covered(r.rect, box) > 0.8]
     readings.sort(key=lambda r: (r.instance.pixels, r.view))
     groups: list[list[Reading]] = []
     merged: list[int] = []

@@ -189,14 +189,15 @@ class Perceiver:
 
     Args:
         weights: a checkpoint of ``tools/train_perception.py`` (default: the shipped one).
-        threads: torch threads (at most 2 on the project's machines).
+        threads: torch threads (default 1: on a shared 2-core machine two threads wait
+            on each other whenever another job holds a core).
     """
 
-    def __init__(self, weights: str | Path | None = None, threads: int = 2) -> None:
+    def __init__(self, weights: str | Path | None = None, threads: int = 1) -> None:
         path = Path(weights) if weights is not None else DEFAULT_WEIGHTS
         if not path.exists():
             raise BadInputError(f"no perception weights at {path}")
-        torch.set_num_threads(int(threads))
+        torch.set_num_threads(max(1, min(int(threads), 2)))
         self.net, self.stride = load_network(path)
 
     @classmethod

@@ -65,7 +65,7 @@ from strug_manip.domains.manipulation.belief import (
     sample_particles,
 )
 from strug_manip.objects import generate_cabinet
-from strug_manip.objects.assembly import FRONT, GAP, scene_T_world_object
+from strug_manip.objects.assembly import FRONT, GAP, scene_object_pose
 from strug_manip.world.perception_data import LabelledView, render_episode
 from strug_manip.world.scene import SceneConfig
 
@@ -116,9 +116,16 @@ def true_parts(seed: int, T_world_cab: np.ndarray, fused: FusedCabinet | None) -
                 [corners[:, 1].min(), corners[:, 1].max(), corners[:, 2].min(), corners[:, 2].max()]
             )
         out.append(
-            dict(joint=p.joint, kind=p.kind, type=p.joint_type, hinge=p.hinge, rect=rect,
-                 axis=R @ p.axis, origin=R @ p.origin + t)
-        )  # fmt: skip
+            dict(
+                joint=p.joint,
+                kind=p.kind,
+                type=p.joint_type,
+                hinge=p.hinge,
+                rect=rect,
+                axis=R @ p.axis,
+                origin=R @ p.origin + t,
+            )
+        )
     return out
 
 
@@ -129,8 +136,12 @@ def hypothesis_joint(h, front) -> tuple[str, np.ndarray, np.ndarray, np.ndarray]
         k = int(np.argmax(h.hinge_prob))
         side = SIDES[k]
         y0, y1, z0, z1 = h.door_rect[k]
-        o = {"left": [0, y0 + GAP, 0.5 * (z0 + z1)], "right": [0, y1 - GAP, 0.5 * (z0 + z1)],
-             "bottom": [0, 0.5 * (y0 + y1), z0 + GAP], "top": [-FRONT, 0.5 * (y0 + y1), z1 - GAP]}[side]  # fmt: skip
+        o = {
+            "left": [0, y0 + GAP, 0.5 * (z0 + z1)],
+            "right": [0, y1 - GAP, 0.5 * (z0 + z1)],
+            "bottom": [0, 0.5 * (y0 + y1), z0 + GAP],
+            "top": [-FRONT, 0.5 * (y0 + y1), z1 - GAP],
+        }[side]
         return (
             t,
             h.door_rect[k],
@@ -186,8 +197,18 @@ def evaluate_cabinet(
     except Exception as e:  # a cabinet not found counts every part as missed
         truth = true_parts(seed, T_world_cab, None)
         n = sum(p["type"] != "fixed" for p in truth)
-        return dict(rec=rec, seconds=seconds, fusion=time.perf_counter() - t0, axis=[], hinge=[],
-                    complete=False, support=(n, 0), spurious=0, causes=Counter({f"no fusion: {e}": n}), seed=seed)  # fmt: skip
+        return dict(
+            rec=rec,
+            seconds=seconds,
+            fusion=time.perf_counter() - t0,
+            axis=[],
+            hinge=[],
+            complete=False,
+            support=(n, 0),
+            spurious=0,
+            causes=Counter({f"no fusion: {e}": n}),
+            seed=seed,
+        )
     t_fusion = time.perf_counter() - t0
     runs = [fused]
     for _ in range(args.noisy_runs if perceiver is not None else 0):
@@ -245,7 +266,7 @@ def evaluate_cabinet(
         support_n += 1
         ok = False
         for p in particles:
-            T = scene_T_world_object(p.spec.depth, 1.0, 0.0, 0.5)
+            T = scene_object_pose(p.spec.depth, 1.0, 0.0, 0.5)
             for part in p.spec.parts:
                 if part.joint_type != tp["type"]:
                     continue
@@ -253,8 +274,11 @@ def evaluate_cabinet(
                 origin = T[:3, :3] @ part.origin + T[:3, 3]
                 if _angle(axis, tp["axis"]) > 10.0:
                     continue
-                d = (_line_distance(tp["origin"], origin, axis) if tp["type"] == "revolute"
-                     else float(np.linalg.norm(origin - tp["origin"])))  # fmt: skip
+                d = (
+                    _line_distance(tp["origin"], origin, axis)
+                    if tp["type"] == "revolute"
+                    else float(np.linalg.norm(origin - tp["origin"]))
+                )
                 if d <= 0.05:
                     ok = True
                     break
@@ -263,11 +287,21 @@ def evaluate_cabinet(
         support_ok += ok
         if not ok:
             causes["true model not in the particles' support"] += 1
-    return dict(rec=rec, seconds=seconds, fusion=t_fusion, axis=axis_err, hinge=hinge_err, complete=complete,
-                support=(support_n, support_ok), spurious=spurious, causes=causes, seed=seed)  # fmt: skip
+    return dict(
+        rec=rec,
+        seconds=seconds,
+        fusion=t_fusion,
+        axis=axis_err,
+        hinge=hinge_err,
+        complete=complete,
+        support=(support_n, support_ok),
+        spurious=spurious,
+        causes=causes,
+        seed=seed,
+    )
 
 
-def _parse_seeds(text: str) -> list[int]:
+def parse_seeds(text: str) -> list[int]:
     try:
         lo, hi = (int(x) for x in text.split(":"))
     except ValueError:
@@ -320,7 +354,7 @@ def main(argv: list[str] | None = None) -> int:
 
     if not 0.0 <= args.dropout < 1.0:
         raise SystemExit(f"--dropout must be in [0, 1), got {args.dropout}")
-    seeds = _parse_seeds(args.seeds)
+    seeds = parse_seeds(args.seeds)
     SceneConfig()  # the scene the views come from
     perceiver = None if args.oracle else Perceiver(args.weights)
     rng = np.random.default_rng(0)
@@ -334,20 +368,25 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     pct = lambda d: f"{d['ok']}/{d['n']} = {100 * d['ok'] / max(d['n'], 1):.1f}%"  # noqa: E731
     print(
-        f"seeds {args.seeds}, {args.views} views per cabinet{' (oracle maps)' if args.oracle else ''}"
+        f"seeds {args.seeds}, {args.views} views per cabinet"
+        + (" (oracle maps)" if args.oracle else "")
     )
     print(f"parts found (per view, IoU >= 0.5): {pct(out['parts_found'])}")
     print(f"joint type right (found parts):    {pct(out['joint_type'])}")
     a = out["axis_error_deg_median"]
     print(
-        f"axis error median [deg]: drawer {a['drawer']:.2f}, door {a['door']:.2f}, flap {a['flap']:.2f}"
+        f"axis error median [deg]: drawer {a['drawer']:.2f}, door {a['door']:.2f}, "
+        f"flap {a['flap']:.2f}"
     )
     print(f"hinge error median [m]:  {out['hinge_error_m_median']:.4f}")
     print(f"cabinets complete after fusion: {pct(out['cabinets_complete'])}")
     print(f"true model in the belief's support (per part): {pct(out['true_in_support'])}")
     print(f"spurious movable hypotheses per cabinet: {out['spurious_per_cabinet']:.2f}")
-    print(f"seconds per view {out['seconds_per_view']:.4f}, fusion {out['seconds_fusion']:.4f}, "
-          f"{args.views} views + fusion {args.views * out['seconds_per_view'] + out['seconds_fusion']:.3f}")  # fmt: skip
+    total = args.views * out["seconds_per_view"] + out["seconds_fusion"]
+    print(
+        f"seconds per view {out['seconds_per_view']:.4f}, fusion {out['seconds_fusion']:.4f}, "
+        f"{args.views} views + fusion {total:.3f}"
+    )
     print("failure causes (per part):")
     for k, v in out["failure_causes"].items():
         print(f"  {v:4d}  {k}")

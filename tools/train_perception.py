@@ -13,7 +13,9 @@ trained with) and ``models/perception/metrics.json`` (the pixel-level figures on
 ``tools/eval_perception.py``). After every epoch the full training state (weights,
 optimiser, schedule, random generators) goes to ``<out>/checkpoint.pt``; ``--resume``
 continues from it, so a killed run loses at most one epoch. Train and test cabinets
-come from disjoint generator seeds. torch uses at most 2 threads.
+come from disjoint generator seeds. torch uses one thread by default (``--threads``, at
+most 2): on the project's shared 2-core machines two threads ran ten times slower than
+one whenever other jobs held the cores (README, "Perception network").
 """
 
 from __future__ import annotations
@@ -50,6 +52,8 @@ CLASS_WEIGHTS = (0.3, 1.0, 1.0, 1.5, 1.5)
 #: Positive weight of handle pixels (about 1% of the cabinet's pixels).
 HANDLE_POS_WEIGHT = 5.0
 TARGETS = ("cls", "centre", "hinge", "handle")
+#: Options that change how a run goes, not what it computes (free to change on resume).
+RUN_ONLY = ("resume", "threads")
 
 
 def load_split(folder: Path, stride: int) -> dict:
@@ -160,10 +164,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--out", type=Path, default=OUT_DIR)
     ap.add_argument("--resume", action="store_true", help="continue from <out>/checkpoint.pt")
+    ap.add_argument("--threads", type=int, default=1, help="torch threads (1 or 2)")
     args = ap.parse_args(argv)
     from tqdm import tqdm
 
-    torch.set_num_threads(2)
+    torch.set_num_threads(max(1, min(args.threads, 2)))
     torch.manual_seed(args.seed)
     rng = np.random.default_rng(args.seed)
     t_load = time.perf_counter()
@@ -181,7 +186,7 @@ def main(argv: list[str] | None = None) -> int:
     ckpt_path, start, seconds = args.out / "checkpoint.pt", 0, 0.0
     if args.resume and ckpt_path.exists():
         ck = torch.load(ckpt_path, weights_only=False)
-        if ck["args"] != {k: v for k, v in vars(args).items() if k != "resume"}:
+        if ck["args"] != {k: v for k, v in vars(args).items() if k not in RUN_ONLY}:
             raise SystemExit(f"{ckpt_path} was made with other settings: {ck['args']}")
         model.load_state_dict(ck["model"])
         opt.load_state_dict(ck["opt"])
@@ -218,7 +223,7 @@ def main(argv: list[str] | None = None) -> int:
             "model": model.state_dict(), "opt": opt.state_dict(), "sched": sched.state_dict(),
             "rng": rng.bit_generator.state, "torch_rng": torch.get_rng_state(),
             "epoch": epoch + 1, "seconds": seconds,
-            "args": {k: v for k, v in vars(args).items() if k != "resume"},
+            "args": {k: v for k, v in vars(args).items() if k not in RUN_ONLY},
         })  # fmt: skip
     metrics = evaluate(model, test)
     metrics.update(

@@ -13,7 +13,7 @@ door panels, handles, masses, joints, interiors) that
 
 Where the spec is placed: the scene stands any cabinet spec with its front plane
 :data:`~strug_manip.world.scene.STAND_SETBACK` behind the cabinet table's edge, facing
-the robot (:func:`scene_T_world_object`). Everything perceived in the world frame is
+the robot (:func:`scene_object_pose`). Everything perceived in the world frame is
 expressed in that placement's object frame, so a particle's parts are where perception
 saw them; box geoms keep the object frame's axes (a perceived yaw of the front of a
 degree or two tilts joint axes, not boards).
@@ -134,7 +134,7 @@ class CabinetModel:
                 raise ConfigError(f"CabinetModel.{name} must be in [0.1, 3] m, got {v!r}")
 
 
-def scene_T_world_object(
+def scene_object_pose(
     depth: float, cabinet_distance: float, lateral: float, stand: float
 ) -> np.ndarray:
     """Where the scene puts the object frame of a cabinet spec ``depth`` deep (the
@@ -288,7 +288,7 @@ def assemble(
     """
     if not isinstance(model, CabinetModel):
         raise ConfigError(f"model must be a CabinetModel, got {model!r}")
-    T_wo = scene_T_world_object(model.depth, cabinet_distance, lateral, stand)
+    T_wo = scene_object_pose(model.depth, cabinet_distance, lateral, stand)
     A = np.linalg.inv(T_wo) @ np.asarray(model.T_world_front, dtype=float)
     R, b = A[:3, :3], A[:3, 3]
 

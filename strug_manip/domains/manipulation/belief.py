@@ -99,8 +99,18 @@ class BeliefConfig:
     def __post_init__(self) -> None:
         check_positive_int("particles", self.particles)
         check_positive_int("noisy_runs", self.noisy_runs, allow_zero=True)
-        for name in ("depth_noise", "rgb_noise", "axis_noise", "origin_noise", "rect_noise",
-                     "q_noise", "split_base", "split_merged", "class_floor", "hinge_floor"):  # fmt: skip
+        for name in (
+            "depth_noise",
+            "rgb_noise",
+            "axis_noise",
+            "origin_noise",
+            "rect_noise",
+            "q_noise",
+            "split_base",
+            "split_merged",
+            "class_floor",
+            "hinge_floor",
+        ):
             v = getattr(self, name)
             if not (isinstance(v, int | float) and math.isfinite(v) and v >= 0):
                 raise ConfigError(f"BeliefConfig.{name} must be a finite number >= 0, got {v!r}")
@@ -111,7 +121,8 @@ class BeliefConfig:
         lo, hi = self.existence_range
         if not 0.0 <= lo <= hi <= 1.0:
             raise ConfigError(
-                f"BeliefConfig.existence_range must be 0 <= lo <= hi <= 1, got {self.existence_range}"
+                "BeliefConfig.existence_range must be 0 <= lo <= hi <= 1, "
+                f"got {self.existence_range}"
             )
         if self.class_floor > 1 / 3 or self.hinge_floor > 1 / 4:
             raise ConfigError("class_floor must be <= 1/3 and hinge_floor <= 1/4")
@@ -198,9 +209,20 @@ def _draw_part(
             upper = max(float(rng.uniform(*gen.DRAWER_TRAVEL_FRAC)) * box_depth, q + 0.01)
             handle = _closed_handle(h, "drawer", axis, origin, q) if len(rects) == 1 else None
             out.append(
-                PartModel("drawer", tuple(r), axis, origin, None, upper, q, "bar" if handle is not None else "none",
-                          handle, float(rng.uniform(*gen.DRAWER_DAMPING)), float(rng.uniform(*gen.DRAWER_FRICTION)))
-            )  # fmt: skip
+                PartModel(
+                    "drawer",
+                    tuple(r),
+                    axis,
+                    origin,
+                    None,
+                    upper,
+                    q,
+                    "bar" if handle is not None else "none",
+                    handle,
+                    float(rng.uniform(*gen.DRAWER_DAMPING)),
+                    float(rng.uniform(*gen.DRAWER_FRICTION)),
+                )
+            )
         return out
     allowed = h.hinge_prob > 1e-4
     side_i = int(rng.choice(4, p=_floored(h.hinge_prob, cfg.hinge_floor, allowed)))
@@ -231,8 +253,21 @@ def _draw_part(
             float(rng.uniform(*gen.DOOR_DAMPING)),
             float(rng.uniform(*gen.DOOR_FRICTION)),
         )
-    return [PartModel("door", tuple(rect), axis, origin, side, upper, q, "bar" if handle is not None else "none",
-                      handle, damping, friction)]  # fmt: skip
+    return [
+        PartModel(
+            "door",
+            tuple(rect),
+            axis,
+            origin,
+            side,
+            upper,
+            q,
+            "bar" if handle is not None else "none",
+            handle,
+            damping,
+            friction,
+        )
+    ]
 
 
 def _ok(rect) -> bool:
@@ -301,12 +336,18 @@ def sample_particles(
                 if not any(_overlaps(m.rect, o.rect) for o in parts):
                     parts.append(m)
                     source.append(i)
-        width = (
-            max(front.width, *(abs(v) * 2 + 0.04 for m in parts for v in m.rect[:2]))
-            if parts
-            else front.width
-        )
-        height = max(front.height, *(m.rect[3] + 0.02 for m in parts)) if parts else front.height
+        # The carcass holds every part (a part may reach past the front seen).
+        box = (0.5 * front.width + 0.1, front.height + 0.1)
+        keep = [
+            i
+            for i, m in enumerate(parts)
+            if max(abs(m.rect[0]), abs(m.rect[1])) <= box[0]
+            and m.rect[2] >= -0.1
+            and m.rect[3] <= box[1]
+        ]
+        parts, source = [parts[i] for i in keep], [source[i] for i in keep]
+        width = max([front.width] + [2 * max(abs(m.rect[0]), abs(m.rect[1])) + 0.04 for m in parts])
+        height = max([front.height] + [m.rect[3] + 0.02 for m in parts])
         model = CabinetModel(
             float(width), float(height), float(depth), tuple(parts), front.T_world_front
         )
