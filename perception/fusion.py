@@ -20,9 +20,11 @@ Steps (:func:`fuse`):
    opposite-hinged door open by pi - theta; both are kept when pi - theta is within
    :data:`SIDE_DOOR_MAX` (the larger generator limit), weighted by the network.
 3. **Association**: instances of all views, smallest first, join the fused part whose
-   rectangle overlaps theirs most (IoU >= :data:`ASSOC_IOU`); an instance that covers
-   two or more fused parts is a merged region: it counts as evidence that the region
-   holds several parts (``merged``) and adds to none. Each fused part gets class
+   largest reading's closed-state rectangle overlaps theirs most (IoU >=
+   :data:`ASSOC_IOU`, the best pair of interpretations: as seen, or as a door hinged on
+   a side the geometry allows; one instance per view and part); an instance holding
+   most of two or more fused parts is a merged region: it counts as evidence that the
+   region holds several parts (``merged``) and adds to none. Each fused part gets class
    probabilities (pixel-weighted mean over its views), hinge-side probabilities, an
    existence probability (confidence-weighted share of the views that could see it
    that did) and the spread of its rectangle and opening over the views.
@@ -50,14 +52,20 @@ PLANE_SAMPLE = 6000
 DOOR_OPEN_TILT = math.radians(12.0)
 #: Largest side-door opening the generator makes (2.10 rad) plus a margin [rad].
 SIDE_DOOR_MAX = 2.2
-#: Rectangles overlapping at least this much (IoU) are one part.
+#: Instances whose closed-state rectangles overlap at least this much (IoU, best pair
+#: of interpretations) are one part.
 ASSOC_IOU = 0.3
+#: A front narrower or lower than this is a measurement failure [m] (the generator's
+#: smallest cabinet is 0.35 x 0.30 m).
+MIN_FRONT = 0.2
 #: Depth of the carcass when its top and sides are not seen: the middle of the
 #: generator's 0.30-0.45 m range [m].
 DEFAULT_DEPTH = 0.375
 #: The gap between a front and its cell [m] and a front's thickness [m] (the middle of
 #: the generator's 0.002-0.004 and 0.015-0.022 m).
 FRONT_GAP, FRONT_THICKNESS = 0.003, 0.018
+#: Sharpness of the handle's hinge-side cue (:func:`_handle_cue`).
+HANDLE_CUE = 6.0
 #: Hinge sides, as :data:`perception.articulation_net.HINGE_SIDES`.
 SIDES = ("left", "right", "top", "bottom")
 #: Joint types of a fused part's class probabilities.
@@ -190,11 +198,12 @@ def fit_front(
     The normal: drawer fronts, closed doors, panels and the carcass's front edges all
     share it, so it is the peak of the histogram (1 deg bins) of the horizontal
     directions of the points' surface normals that face the cameras within 60 deg,
-    refined by the mean of the normals within 4 deg of the peak. The offset: an open
-    drawer's front is parallel to the cabinet's but holds no carcass pixel, and the
-    back panel seen through open cells lies behind the front; so along the normal, the
-    front is the nearest-to-the-cameras peak of the points' offsets (4 mm bins) that
-    holds a fifth of the largest peak's points and a tenth carcass points.
+    refined by the mean of the normals within 4 deg of the peak. The offset: the points'
+    offsets along the normal (4 mm bins) have peaks at the front, at open drawers' fronts
+    (in front of it, no carcass), at the back panel seen through open cells (behind it)
+    and at thin carcass-looking strips (an open door's edge); the front is the peak with
+    the most carcass points on it less twice the carcass points 2 cm or more in front of
+    it (the carcass lies behind its front).
 
     Args:
         points: (N, 3) world points of the cabinet [m]; normals: (N, 3) their unit
@@ -231,17 +240,19 @@ def fit_front(
     smooth_c = np.convolve(hist_c, np.ones(3), "same")
     peaks = [
         k for k in range(len(smooth))
-        if smooth[k] == smooth[max(0, k - 2) : k + 3].max() and smooth[k] >= 0.2 * smooth.max()
-        and smooth_c[k] >= 0.1 * smooth[k]
+        if smooth[k] == smooth[max(0, k - 2) : k + 3].max() and smooth[k] >= 0.05 * smooth.max()
     ]  # fmt: skip
-    k = max(peaks) if peaks else int(np.argmax(smooth))  # largest offset: nearest the cameras
+    # Carcass on the plane, minus twice the carcass in front of it (2 cm and more).
+    ahead = np.cumsum(hist_c[::-1])[::-1]  # carcass points in bin k and beyond
+    score = [smooth_c[k] - 2.0 * (ahead[k + 5] if k + 5 < len(ahead) else 0) for k in peaks]
+    k = peaks[int(np.argmax(score))] if peaks else int(np.argmax(smooth))
     d = float(lo + (k + 0.5) * 0.004)
     inl = np.abs(off - d) < PLANE_TOL
     d = float(np.median(off[inl]))
     return n, d, np.abs(off - d) < PLANE_TOL
 
 
-def _run(v: np.ndarray, bin_size: float = 0.01, max_gap: int = 3) -> tuple[float, float]:
+def _run(v: np.ndarray, bin_size: float = 0.01, max_gap: int = 8) -> tuple[float, float]:
     """The extent of the contiguous run (gaps of at most ``max_gap`` empty bins) of the
     values ``v`` [m] that holds their median: stray points (a table pixel called
     carcass) outside the cabinet do not widen it."""
@@ -282,11 +293,15 @@ def front_frame(views: Sequence[ViewParts]) -> FrontFrame:
     local_y = pts @ y
     local_z = pts[:, 2]
     y0, y1 = _run(local_y[inl])
+    if y1 - y0 < MIN_FRONT:  # a broken run: fall back to the inliers' percentiles
+        y0, y1 = (float(v) for v in np.percentile(local_y[inl], [1.0, 99.0]))
     z0, z_top = _run(local_z[inl])
+    if z_top - z0 < MIN_FRONT:
+        z0, z_top = (float(v) for v in np.percentile(local_z[inl], [1.0, 99.0]))
     behind = d - pts @ n
     body = (local_y > y0 - 0.02) & (local_y < y1 + 0.02) & (behind > -0.02) & (behind < 0.7)
     body &= local_z < z_top + 0.02
-    z_bot, _ = _run(local_z[body]) if body.sum() > 20 else (z0, z_top)
+    z_bot = min(_run(local_z[body])[0], z0) if body.sum() > 20 else z0
     depth_seen = float(np.percentile(behind[body], 99.0)) if body.sum() > 20 else 0.0
     seen_ok = depth_seen > 0.25
     T = np.eye(4)
@@ -402,7 +417,19 @@ def _visible(rect: np.ndarray, front: FrontFrame, view: ViewParts) -> bool:
     return 0 <= u < w and 0 <= v < h
 
 
-def _summarise(group: list[Reading], merged: int, visible: int) -> PartHypothesis:
+def _handle_cue(handle: np.ndarray, rect: np.ndarray) -> np.ndarray:
+    """Hinge-side likelihoods (4,) from where a closed door's handle sits: handles are
+    near the free edge (the generator puts them 3-6 cm in from it), so a handle right of
+    the centre (+y) means a left hinge, one below the centre a top hinge."""
+    u = (handle[1] - 0.5 * (rect[0] + rect[1])) / max(0.5 * (rect[1] - rect[0]), 1e-3)
+    v = (handle[2] - 0.5 * (rect[2] + rect[3])) / max(0.5 * (rect[3] - rect[2]), 1e-3)
+    e = np.exp(HANDLE_CUE * np.array([u, -u, -v, v]))
+    return e / e.sum()
+
+
+def _summarise(
+    group: list[Reading], merged: int, visible: int, front: FrontFrame
+) -> PartHypothesis:
     wts = np.array([r.instance.pixels for r in group], dtype=float)
     wts /= wts.sum()
     rects = np.stack([r.face_rect for r in group])
@@ -426,6 +453,11 @@ def _summarise(group: list[Reading], merged: int, visible: int) -> PartHypothesi
     handles = [
         (r.instance.handle, r.instance.handle_score) for r in group if r.instance.handle is not None
     ]
+    handle = (
+        front.to_front(np.median(np.stack([h for h, _ in handles]), axis=0)) if handles else None
+    )
+    if handle is not None and all(r.closed_door for r in group):
+        hinge = hinge * _handle_cue(handle, rect)
     return PartHypothesis(
         rect=rect,
         rect_std=rects.std(axis=0),
@@ -436,7 +468,7 @@ def _summarise(group: list[Reading], merged: int, visible: int) -> PartHypothesi
         door_q=door_q,
         q_drawer=float(np.median([r.q_drawer for r in group])),
         q_std=float(np.std([r.q_drawer for r in group])),
-        handle=np.median(np.stack([h for h, _ in handles]), axis=0) if handles else None,
+        handle=handle,
         handle_score=float(max((s for _, s in handles), default=0.0)),
         views=len({r.view for r in group}),
         visible=visible,
@@ -444,6 +476,12 @@ def _summarise(group: list[Reading], merged: int, visible: int) -> PartHypothesi
         shelf=float(np.median([r.depth_x for r in group])) < -0.04,
         readings=group,
     )
+
+
+def _candidates(r: Reading) -> list[np.ndarray]:
+    """The closed-state rectangles a reading may stand for: as seen, as associated, and
+    as a door hinged on each side its geometry allows."""
+    return [r.rect, r.face_rect, *(r.door_rect[k] for k in range(4) if r.door_ok[k])]
 
 
 def fuse(views: Sequence[ViewParts]) -> FusedCabinet:
@@ -467,32 +505,36 @@ def fuse(views: Sequence[ViewParts]) -> FusedCabinet:
     readings = [r for r in readings if _covered(r.rect, box) > 0.8]
     readings.sort(key=lambda r: (r.instance.pixels, r.view))
     groups: list[list[Reading]] = []
+    refs: list[Reading] = []  # each group's largest reading
     merged: list[int] = []
     for r in readings:
-        rects = [np.median(np.stack([g.rect for g in grp]), axis=0) for grp in groups]
+        cands = _candidates(r)
+        # A merged region: it covers two or more parts that each fill little of it.
         covered = [
-            k
-            for k, rc in enumerate(rects)
-            if _covered(rc, r.rect) > 0.7 and rect_iou(rc, r.rect) < 0.6
-        ]
+            k for k, g in enumerate(refs)
+            if _covered(g.rect, r.rect) > 0.7 and rect_iou(g.rect, r.rect) < 0.6
+        ]  # fmt: skip
         if len(covered) >= 2:
             for k in covered:
                 merged[k] += 1
             continue
-        scores = [rect_iou(rc, r.rect) for rc in rects]
-        best = int(np.argmax(scores)) if scores else -1
-        if best >= 0 and scores[best] >= ASSOC_IOU and all(g.view != r.view for g in groups[best]):
-            groups[best].append(r)
+        scores = [max(rect_iou(a, b) for a in cands for b in _candidates(g)) for g in refs]
+        free = [
+            k for k in np.argsort(scores)[::-1]
+            if scores[k] >= ASSOC_IOU and all(g.view != r.view for g in groups[k])
+        ]  # fmt: skip
+        if free:
+            groups[free[0]].append(r)
+            if r.instance.pixels > refs[free[0]].instance.pixels:
+                refs[free[0]] = r
         else:
             groups.append([r])
+            refs.append(r)
             merged.append(0)
     parts = []
     for grp, mg in zip(groups, merged, strict=True):
         rect = np.median(np.stack([g.rect for g in grp]), axis=0)
         visible = sum(_visible(rect, front, v) for v in views if v.sees_cabinet)
-        hyp = _summarise(grp, mg, visible)
-        if hyp.handle is not None:
-            hyp.handle = front.to_front(hyp.handle)
-        parts.append(hyp)
+        parts.append(_summarise(grp, mg, visible, front))
     parts.sort(key=lambda p: -(p.rect[1] - p.rect[0]) * (p.rect[3] - p.rect[2]))
     return FusedCabinet(front, parts, time.perf_counter() - t0)
