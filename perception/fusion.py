@@ -64,6 +64,8 @@ DEFAULT_DEPTH = 0.375
 #: The gap between a front and its cell [m] and a front's thickness [m] (the middle of
 #: the generator's 0.002-0.004 and 0.015-0.022 m).
 FRONT_GAP, FRONT_THICKNESS = 0.003, 0.018
+#: Likelihood of the joint types a part's geometry rules out (per view it is seen in).
+GEOMETRY_EVIDENCE = 0.2
 #: Sharpness of the handle's hinge-side cue (:func:`_handle_cue`).
 HANDLE_CUE = 6.0
 #: Hinge sides, as :data:`perception.articulation_net.HINGE_SIDES`.
@@ -120,6 +122,9 @@ class Reading:
             [rad]; door_ok: (4,) which sides are geometrically possible.
         closed_door: the panel lies in the front plane.
         depth_x: median front-frame x of its points [m] (shelves lie deep inside).
+        evidence: (3,) likelihood of fixed, prismatic, revolute from the geometry alone
+            (:data:`GEOMETRY_EVIDENCE`): a front moved out parallel to the front plane is
+            a drawer's; a panel turned out of it about an edge on it, a door's.
     """
 
     view: int
@@ -132,6 +137,7 @@ class Reading:
     door_ok: np.ndarray
     closed_door: bool
     depth_x: float
+    evidence: np.ndarray = field(default_factory=lambda: np.ones(3))
 
 
 @dataclass
@@ -301,6 +307,9 @@ def front_frame(views: Sequence[ViewParts]) -> FrontFrame:
     behind = d - pts @ n
     body = (local_y > y0 - 0.02) & (local_y < y1 + 0.02) & (behind > -0.02) & (behind < 0.7)
     body &= local_z < z_top + 0.02
+    # The carcass bottom lies at most a plinth and a board (10 cm) below the front's
+    # lowest point; below that, points called cabinet are the table or its legs.
+    body &= local_z > z0 - 0.1
     z_bot = min(_run(local_z[body])[0], z0) if body.sum() > 20 else z0
     depth_seen = float(np.percentile(behind[body], 99.0)) if body.sum() > 20 else 0.0
     seen_ok = depth_seen > 0.25
@@ -323,6 +332,26 @@ def _extent(v: np.ndarray) -> tuple[float, float]:
     return float(lo), float(hi)
 
 
+def _panel_plane(P: np.ndarray, iterations: int = 3) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A panel's plane from its points (N, 3), refitted on the points near it (within 1 cm
+    or twice the median residual): ``(centroid, unit normal with x >= 0, inliers)``.
+    Pixels of something else in the instance (the cell's inside seen past an open
+    door) would otherwise tilt the plane and widen the panel."""
+    pts = P
+    for _ in range(iterations):
+        c = pts.mean(axis=0)
+        _, _, vt = np.linalg.svd(pts - c, full_matrices=False)
+        res = np.abs((P - c) @ vt[2])
+        keep = res < max(0.01, 2.0 * float(np.median(res)))
+        if keep.sum() < 10:
+            break
+        pts = P[keep]
+    c = pts.mean(axis=0)
+    _, _, vt = np.linalg.svd(pts - c, full_matrices=False)
+    m = vt[2] if vt[2][0] >= 0 else -vt[2]
+    return c, m, pts
+
+
 def read_instance(view: int, inst: Instance, front: FrontFrame) -> Reading:
     """Interpret one instance under every joint type (module docstring, step 2).
 
@@ -340,12 +369,13 @@ def read_instance(view: int, inst: Instance, front: FrontFrame) -> Reading:
     door_rect = np.tile(face_rect, (4, 1))
     door_q = np.zeros(4)
     ok = np.ones(4, dtype=bool)
-    c = P.mean(axis=0)
-    _, _, vt = np.linalg.svd(P - c, full_matrices=False)
-    m = vt[2] if vt[2][0] >= 0 else -vt[2]  # the panel's normal
+    c, m, P = _panel_plane(P)
     tilt = math.acos(min(1.0, abs(float(m[0]))))
     closed = tilt < DOOR_OPEN_TILT
     primary = None
+    evidence = np.ones(3)
+    if closed and depth_x > 0.025:  # moved out, still parallel: only a drawer does that
+        evidence = np.array([GEOMETRY_EVIDENCE, 1.0, GEOMETRY_EVIDENCE])
     if not closed:
         ok[:] = False
         side_door = abs(float(m[1])) > abs(float(m[2]))  # turned about a vertical line
@@ -356,6 +386,8 @@ def read_instance(view: int, inst: Instance, front: FrontFrame) -> Reading:
         hinge, free = ends if ends[0][0] <= ends[1][0] else ends[::-1]  # hinge: nearer the front
         w = s_hi - s_lo
         dirn = free - hinge
+        if abs(hinge[0]) < 0.04 and free[0] > 0.05:  # turned out about an edge on the front
+            evidence = np.array([GEOMETRY_EVIDENCE, GEOMETRY_EVIDENCE, 1.0])
         if side_door:
             theta = math.atan2(max(dirn[0], 0.0), abs(dirn[1]))
             first, second = (0, 1) if dirn[1] > 0 else (1, 0)  # left if the free edge is to +y
@@ -382,8 +414,9 @@ def read_instance(view: int, inst: Instance, front: FrontFrame) -> Reading:
     as_door = primary is not None and inst.class_prob[2] >= inst.class_prob[1]
     rect = door_rect[primary].copy() if as_door else face_rect
     return Reading(
-        view, inst, rect, face_rect, max(depth_x, 0.0), door_rect, door_q, ok, closed, depth_x
-    )
+        view, inst, rect, face_rect, max(depth_x, 0.0), door_rect, door_q, ok, closed, depth_x,
+        evidence,
+    )  # fmt: skip
 
 
 # --- association ----------------------------------------------------------------------
@@ -435,6 +468,7 @@ def _summarise(
     rects = np.stack([r.face_rect for r in group])
     rect = np.median(rects, axis=0) if len(group) > 2 else (wts[:, None] * rects).sum(axis=0)
     cls = (wts[:, None] * np.stack([r.instance.class_prob for r in group])).sum(axis=0)
+    cls = cls * np.prod(np.stack([r.evidence for r in group]), axis=0) + 1e-9
     net = (wts[:, None] * np.stack([r.instance.hinge_prob for r in group])).sum(axis=0)
     # Geometry: an open panel allows only the sides it can be hinged on.
     ok = np.all(np.stack([r.door_ok for r in group]), axis=0)

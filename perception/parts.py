@@ -52,9 +52,9 @@ PART_CLASSES = (2, 3, 4)
 #: Smallest instance kept [pixels at the network's resolution].
 MIN_PIXELS = 30
 #: Smallest accumulated vote count of an instance centre.
-MIN_VOTES = 12.0
+MIN_VOTES = 20.0
 #: Smoothing of the vote image [pixels] and the window of its local maxima [pixels].
-VOTE_SIGMA, PEAK_WINDOW = 1.5, 7
+VOTE_SIGMA, PEAK_WINDOW = 2.5, 11
 #: Fewer cabinet pixels than this (network resolution) is "no cabinet in view".
 MIN_CABINET_PIXELS = 150
 

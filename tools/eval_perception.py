@@ -234,7 +234,13 @@ def evaluate_cabinet(
         k = int(np.argmax(scores)) if scores else -1
         if k < 0 or scores[k] < 0.5:
             complete = False
-            causes["not matched after fusion"] += 1
+            raw = [rect_iou(tp["rect"], e[1]) for e in est]
+            if raw and max(raw) >= 0.5:
+                causes["not matched after fusion: existence < 0.5"] += 1
+            elif raw and max(raw) >= 0.2:
+                causes["not matched after fusion: rectangle IoU in [0.2, 0.5)"] += 1
+            else:
+                causes["not matched after fusion: no hypothesis there"] += 1
             continue
         used.add(k)
         t, _, axis, origin = est[k]

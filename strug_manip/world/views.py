@@ -34,8 +34,9 @@ from strug_manip.world.sim import CameraFrame, ManipulationWorld
 
 #: Where the head aims: this far behind the cabinet table's front edge [m] ...
 AIM_BEHIND = STAND_SETBACK + 0.15
-#: ... and this far above the table's top [m] (about mid-height of a 0.3-0.85 m cabinet).
-AIM_ABOVE = 0.25
+#: ... and this far above the table's top [m] (near the middle of the tallest cabinet,
+#: 0.85 m: from the standard poses the whole of any generated cabinet is in view).
+AIM_ABOVE = 0.38
 
 #: (gap from the table's front edge to the base origin [m], lateral offset from the
 #: centre line [m], torso lift [m]) of each standard view, in the order taken.

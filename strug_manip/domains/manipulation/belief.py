@@ -346,8 +346,12 @@ def sample_particles(
             and m.rect[3] <= box[1]
         ]
         parts, source = [parts[i] for i in keep], [source[i] for i in keep]
-        width = max([front.width] + [2 * max(abs(m.rect[0]), abs(m.rect[1])) + 0.04 for m in parts])
-        height = max([front.height] + [m.rect[3] + 0.02 for m in parts])
+        # Never smaller than the generator's smallest cabinet (a failed front measurement).
+        width = max(
+            [front.width, gen.WIDTH_RANGE[0]]
+            + [2 * max(abs(m.rect[0]), abs(m.rect[1])) + 0.04 for m in parts]
+        )
+        height = max([front.height, gen.HEIGHT_RANGE[0]] + [m.rect[3] + 0.02 for m in parts])
         model = CabinetModel(
             float(width), float(height), float(depth), tuple(parts), front.T_world_front
         )
