@@ -34,6 +34,7 @@ All lengths [m], angles [rad], frames ``T_world_frame`` (4, 4).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from collections.abc import Sequence
@@ -460,6 +461,21 @@ def _handle_cue(handle: np.ndarray, rect: np.ndarray) -> np.ndarray:
     return e / e.sum()
 
 
+def _handle_class_cue(handle: np.ndarray, rect: np.ndarray) -> np.ndarray:
+    """Joint-type likelihoods (3,) from a closed front's handle: fixed fronts have none; a
+    drawer's is centred; a door's is near its free edge (at least half-way from the
+    centre to the edge, as the generator and most furniture place them)."""
+    u = (handle[1] - 0.5 * (rect[0] + rect[1])) / max(0.5 * (rect[1] - rect[0]), 1e-3)
+    v = (handle[2] - 0.5 * (rect[2] + rect[3])) / max(0.5 * (rect[3] - rect[2]), 1e-3)
+    off = max(abs(u), abs(v))
+    g = GEOMETRY_EVIDENCE
+    if off < 0.3:
+        return np.array([g, 1.0, g])
+    if off > 0.45:
+        return np.array([g, g, 1.0])
+    return np.array([g, 1.0, 1.0])
+
+
 def _summarise(
     group: list[Reading], merged: int, visible: int, front: FrontFrame
 ) -> PartHypothesis:
@@ -492,6 +508,7 @@ def _summarise(
     )
     if handle is not None and all(r.closed_door for r in group):
         hinge = hinge * _handle_cue(handle, rect)
+        cls = cls * _handle_class_cue(handle, rect)
     return PartHypothesis(
         rect=rect,
         rect_std=rects.std(axis=0),
@@ -570,5 +587,52 @@ def fuse(views: Sequence[ViewParts]) -> FusedCabinet:
         rect = np.median(np.stack([g.rect for g in grp]), axis=0)
         visible = sum(_visible(rect, front, v) for v in views if v.sees_cabinet)
         parts.append(_summarise(grp, mg, visible, front))
+    parts = _join_open_fragments(parts)
     parts.sort(key=lambda p: -(p.rect[1] - p.rect[0]) * (p.rect[3] - p.rect[2]))
     return FusedCabinet(front, parts, time.perf_counter() - t0)
+
+
+def _join_open_fragments(parts: list[PartHypothesis]) -> list[PartHypothesis]:
+    """Join drawer hypotheses that are pieces of one open drawer front: both pulled out
+    (more than 2 cm) by the same amount (within 1 cm), side by side or one above the
+    other within 8 cm, spanning the same rows or columns. Two real drawers are never
+    pulled out by the same centimetre by chance; at the front plane a divider would
+    separate them."""
+    out = list(parts)
+    joined = True
+    while joined:
+        joined = False
+        for i in range(len(out)):
+            for j in range(i + 1, len(out)):
+                a, b = out[i], out[j]
+                if a.joint_type != "prismatic" or b.joint_type != "prismatic":
+                    continue
+                if min(a.q_drawer, b.q_drawer) < 0.02 or abs(a.q_drawer - b.q_drawer) > 0.01:
+                    continue
+                ra, rb = a.rect, b.rect
+                gap_y = max(ra[0], rb[0]) - min(ra[1], rb[1])
+                gap_z = max(ra[2], rb[2]) - min(ra[3], rb[3])
+                span_z = min(ra[3], rb[3]) - max(ra[2], rb[2])
+                span_y = min(ra[1], rb[1]) - max(ra[0], rb[0])
+                side = gap_y < 0.08 and span_z > 0.8 * min(ra[3] - ra[2], rb[3] - rb[2])
+                stack = gap_z < 0.08 and span_y > 0.8 * min(ra[1] - ra[0], rb[1] - rb[0])
+                if not (side or stack):
+                    continue
+                rect = np.array([min(ra[0], rb[0]), max(ra[1], rb[1]),
+                                 min(ra[2], rb[2]), max(ra[3], rb[3])])  # fmt: skip
+                big, small = (a, b) if a.views * a.existence >= b.views * b.existence else (b, a)
+                out[i] = dataclasses.replace(
+                    big,
+                    rect=rect,
+                    door_rect=np.tile(rect, (4, 1)),
+                    existence=max(a.existence, b.existence),
+                    views=max(a.views, b.views),
+                    handle=big.handle if big.handle is not None else small.handle,
+                    readings=big.readings + small.readings,
+                )
+                del out[j]
+                joined = True
+                break
+            if joined:
+                break
+    return out
