@@ -115,7 +115,8 @@ def test_quantile_hausdorff_matches_its_definition() -> None:
         ref = max(a[int(0.9 * (len(a) - 1))], b[int(0.9 * (len(b) - 1))])
         assert abs(g - ref) < 1e-12
     assert got[0] < got[1] < got[2]
-    ll = log_likelihood(obs, preds)
+    ll = log_likelihood(obs, preds, quantile=0.9)
+    np.testing.assert_allclose(ll, -0.5 * (got / 0.01) ** 2 - np.log(0.01 * np.sqrt(2 * np.pi)))
     assert np.argmax(ll) == 0
 
 

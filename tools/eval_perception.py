@@ -167,12 +167,14 @@ def evaluate_cabinet(
     seconds = []
     vparts = []
     causes = Counter()
+    checked = []  # the views as perception saw them (dropouts included)
     for lv in lvs:
         depth = lv.depth.copy()
         if args.dropout > 0:
             depth[rng.random(depth.shape) < args.dropout] = np.nan
         t0 = time.perf_counter()
         v = check_view(lv.rgb, depth, lv.T_world_camera, lv.fovy)
+        checked.append(v)
         vp = extract(v, oracle_output(lv), 2, t0) if perceiver is None else perceiver.perceive(v)
         seconds.append(time.perf_counter() - t0)
         vparts.append(vp)
@@ -212,10 +214,8 @@ def evaluate_cabinet(
     t_fusion = time.perf_counter() - t0
     runs = [fused]
     for _ in range(args.noisy_runs if perceiver is not None else 0):
-        noisy = [
-            noisy_view(check_view(lv.rgb, lv.depth, lv.T_world_camera, lv.fovy), rng, 0.004, 6.0)
-            for lv in lvs
-        ]
+        cfg = BeliefConfig()
+        noisy = [noisy_view(v, rng, cfg.depth_noise, cfg.rgb_noise) for v in checked]
         runs.append(fuse([perceiver.perceive(v) for v in noisy]))
     particles = sample_particles(
         runs, rng, BeliefConfig(particles=args.particles, noisy_runs=args.noisy_runs)
