@@ -3,10 +3,9 @@ cabinet, in the world frame.
 
 Steps (:func:`fuse`):
 
-1. **The front plane**, from the cabinet points of every view at once (RANSAC with a
-   horizontal normal: the cabinet stands upright on its table, so its front is a
-   vertical plane; the normal is the one facing the cameras). It fixes the *front
-   frame* ``F``: ``x`` the outward normal, ``z`` world up, ``y = z x x`` (the
+1. **The front plane**, from the cabinet points of every view at once (the cabinet
+   stands upright on its table, so its front is a vertical plane; :func:`fit_front`).
+   It fixes the *front frame* ``F``: ``x`` the outward normal, ``z`` world up, ``y = z x x`` (the
    generator's object axes), origin on the plane below the front's centre at the
    carcass's lowest point. A drawer's axis is this normal; a door's hinge is an edge of
    its panel; so joint axes come from hundreds of depth points instead of a learnt
@@ -15,10 +14,13 @@ Steps (:func:`fuse`):
    y1, z0, z1`` in ``F`` [m]) and its joint parameters under each interpretation: as a
    drawer, its opening [m] (the front face's distance from the plane); as a door, the
    hinge side and opening angle [rad]. An open door's hinge is the panel edge nearest
-   the front plane (geometry); a closed door's is the side the network votes for (the
-   handle is on the free edge). A side door open by theta looks exactly like the
-   opposite-hinged door open by pi - theta; both are kept when pi - theta is within
-   :data:`SIDE_DOOR_MAX` (the larger generator limit), weighted by the network.
+   the front plane (geometry); a closed door's is the side the network votes for, times
+   the handle's cue (a handle sits near the free edge). A side door open by theta looks
+   exactly like the opposite-hinged door open by pi - theta; both are kept when
+   pi - theta is within :data:`SIDE_DOOR_MAX` (the larger generator limit), weighted by
+   the network. The geometry also weighs the joint type (:data:`GEOMETRY_EVIDENCE`): a
+   front moved out parallel to the plane is a drawer's, a panel turned out about an
+   edge on it a door's, a closed front's centred handle a drawer's.
 3. **Association**: instances of all views, smallest first, join the fused part whose
    largest reading's closed-state rectangle overlaps theirs most (IoU >=
    :data:`ASSOC_IOU`, the best pair of interpretations: as seen, or as a door hinged on
@@ -27,7 +29,8 @@ Steps (:func:`fuse`):
    region holds several parts (``merged``) and adds to none. Each fused part gets class
    probabilities (pixel-weighted mean over its views), hinge-side probabilities, an
    existence probability (confidence-weighted share of the views that could see it
-   that did) and the spread of its rectangle and opening over the views.
+   that did) and the spread of its rectangle and opening over the views. Pieces of one
+   open drawer (pulled out by the same centimetre, side by side) are joined.
 
 All lengths [m], angles [rad], frames ``T_world_frame`` (4, 4).
 """
@@ -45,10 +48,8 @@ import numpy as np
 from perception.errors import NoCabinetError
 from perception.parts import Instance, ViewParts
 
-#: RANSAC inlier distance of the front plane [m] and iterations.
-PLANE_TOL, PLANE_ITERS = 0.006, 150
-#: Points used by the front-plane fit (a fixed, seeded subsample).
-PLANE_SAMPLE = 6000
+#: Distance of a point on the front plane from it [m].
+PLANE_TOL = 0.006
 #: A door panel tilted by more than this from the front plane is open [rad].
 DOOR_OPEN_TILT = math.radians(12.0)
 #: Largest side-door opening the generator makes (2.10 rad) plus a margin [rad].
