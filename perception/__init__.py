@@ -1,11 +1,21 @@
-"""Perception: RGB-D from the robot's head camera to an initial belief over kinematic models.
+"""Perception: RGB-D from the robot's head camera to part hypotheses for the belief.
 
-Planned contents (see ../shared/DESIGN.md, "Perception"): part segmentation, joint type
-and joint parameter prediction (torch), the pull-affordance heat map that biases
-controller parameters, and the point-cloud observation model. This package may import
-numpy, torch and opencv only. Today it holds the per-pixel articulation network
-(:mod:`perception.articulation_net`). Its training and test data, labelled
-RGB-D views rendered in MuJoCo, come from :mod:`strug_manip.world.perception_data`
-(``tools/render_perception_data.py``), stored as ``.npz`` shards this package can read
-without MuJoCo.
+Imports numpy, torch, opencv and scipy only: it sees images, depth and camera poses,
+never MuJoCo, a planner or the rest of the stack (its errors are re-exported by
+:mod:`strug_manip.errors`).
+
+- :mod:`perception.inputs`: checking one view (shapes, dtypes, units, dropouts).
+- :mod:`perception.articulation_net`: the per-pixel network (classes, instance centre
+  votes, hinge sides, pull affordance) and its training targets.
+- :mod:`perception.parts`: one view to part instances in the world frame.
+- :mod:`perception.fusion`: the cabinet's front plane and the views' instances fused
+  into part hypotheses (existence, class and hinge-side probabilities, joint
+  parameters, their spread).
+- :mod:`perception.affordance`: grasp poses biased by the pull affordance.
+- :mod:`perception.likelihood`: the point-cloud observation model (quantile
+  Hausdorff distance, vectorised over particles).
+
+Training data (labelled views rendered in MuJoCo) come from
+:mod:`strug_manip.world.perception_data`; particles of complete cabinets are drawn by
+:mod:`strug_manip.domains.manipulation.belief`.
 """

@@ -1,32 +1,35 @@
-"""Per-pixel articulation network: RGB-D in, part classes and joint parameters out.
+"""Per-pixel articulation network: RGB-D in, part classes, instances, hinge sides and
+pull affordances out.
 
 A small U-Net (torch, CPU-sized) reads one head-camera view (RGB and depth) and predicts,
-for every pixel,
+for every pixel (output channels in this order, :data:`N_OUT` in all):
 
-* its class (:data:`CLASSES`): not the cabinet, the carcass, a fixed front (panel or
-  shelf), a drawer (prismatic joint) or a door (revolute joint);
-* for drawer and door pixels, the unit joint axis in the camera frame (3 channels;
-  for doors a line, trained sign-free: the sign that opens the door is recovered from
-  the geometry by :func:`extract_parts`);
-* for door pixels, the offset from the pixel's 3D point to the hinge origin [m]
-  (3 channels): every pixel votes for its hinge, as in per-pixel articulation
-  estimators (e.g. ANCSH, Li et al. 2020).
+* its class (:data:`CLASSES`, 5 logits): not the cabinet, the carcass, a fixed front
+  (panel or shelf), a drawer (prismatic joint) or a door (revolute joint);
+* the offset from the pixel to the centre of its part's visible region (2 channels,
+  image columns and rows at the network's resolution divided by :data:`CENTRE_SCALE`):
+  every pixel of a part votes for one centre, so adjacent fronts of one class (a drawer
+  stack) come out as separate instances (centre voting, as in Panoptic-DeepLab);
+* for door pixels, the hinge side (:data:`HINGE_SIDES`, 4 logits) as a person in front
+  of the cabinet names it: which edge the door turns about;
+* the pull affordance (1 logit): the pixel is on a handle (bar, post or knob), where a
+  pull grasps.
 
-:func:`extract_parts` turns these maps into part hypotheses: connected regions of one
-class, each with a class confidence, the mean predicted axis and the median voted hinge
-origin. Turning hypotheses into belief particles (with noise on inputs, classes and
-parameters, as the paper does) is the job of the belief builder.
+Joint axes and hinge lines are *not* regressed: they follow from the depth geometry
+(:mod:`perception.parts`), which is exact to a few millimetres where a learnt
+regression was off by 15 degrees. The network decides what geometry cannot see:
+classes, instances, and which edge of a closed door is the hinge.
 
 Input convention (:func:`prepare_input`): images are downsampled by ``stride`` (default
 2: 240x320 -> 120x160); RGB scaled to [0, 1]; depth clipped to ``MAX_DEPTH`` and divided
 by it. Everything is in the camera frame of :mod:`strug_manip.world.sim` (looking along
--z, +x right, +y up).
+-z, +x right, +y up). This module does not check its inputs; :func:`perception.views
+.check_view` does.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import cv2
 import numpy as np
@@ -35,10 +38,18 @@ from torch import nn
 
 #: Pixel classes, in output-channel order.
 CLASSES = ("background", "carcass", "fixed", "prismatic", "revolute")
+#: Door hinge sides, in output-channel order (the generator's names).
+HINGE_SIDES = ("left", "right", "top", "bottom")
 #: Depth beyond which a pixel is treated as far background [m].
 MAX_DEPTH = 4.0
-#: Output channels: class logits, joint axis (3), hinge offset (3).
-N_OUT = len(CLASSES) + 6
+#: Centre offsets are predicted in units of this many pixels (network resolution).
+CENTRE_SCALE = 20.0
+#: Channel slices of the output.
+SL_CLASS = slice(0, 5)
+SL_CENTRE = slice(5, 7)
+SL_HINGE = slice(7, 11)
+SL_HANDLE = slice(11, 12)
+N_OUT = 12
 
 
 def class_targets(part_map: np.ndarray, joint_type: np.ndarray) -> np.ndarray:
@@ -57,13 +68,24 @@ def pixel_points(depth: np.ndarray, fovy: float) -> np.ndarray:
     return np.stack([u * d / f, -v * d / f, -d], axis=-1)
 
 
+def hinge_side_of(axis_cabinet: np.ndarray) -> int:
+    """Index into :data:`HINGE_SIDES` of a door whose (signed, opening) axis in the
+    cabinet frame is ``axis_cabinet`` (3,): the generator's axis is ``e x n`` with ``e``
+    from the hinge to the free edge and ``n = +x``, so left -> -z, right -> +z,
+    top -> -y, bottom -> +y."""
+    a = np.asarray(axis_cabinet, dtype=float)
+    k = int(np.argmax(np.abs(a[1:]))) + 1
+    if k == 2:
+        return 0 if a[2] < 0 else 1
+    return 2 if a[1] < 0 else 3
+
+
 def view_targets(
     part_map: np.ndarray,
     joint_type: np.ndarray,
     axis_cam: np.ndarray,
-    origin_cam: np.ndarray,
-    depth: np.ndarray,
-    fovy: float,
+    T_camera_cabinet: np.ndarray,
+    handle_map: np.ndarray,
     stride: int = 2,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Training targets of one labelled view at the network's resolution.
@@ -71,25 +93,35 @@ def view_targets(
     Args:
         part_map: (H, W) part index per pixel (-1 background, 0 carcass, k part k).
         joint_type: (P,) 0 fixed, 1 prismatic, 2 revolute.
-        axis_cam, origin_cam: (P, 3) joint axes and origins, camera frame [m].
-        depth: (H, W) depth [m]; fovy: vertical field of view [rad].
+        axis_cam: (P, 3) joint axes, camera frame.
+        T_camera_cabinet: (4, 4) the cabinet frame in the camera frame.
+        handle_map: (H, W) bool, handle pixels.
         stride: subsampling, as in :func:`prepare_input`.
 
     Returns:
-        ``(classes (h, w) int64, axis (3, h, w), hinge offset (3, h, w) [m],
-        points (h, w, 3) [m])``, float32 where not integer; axis and offset are only
-        meaningful on drawer and door pixels.
+        ``(classes (h, w) int64, centre offsets (2, h, w) float32 in CENTRE_SCALE
+        pixels (meaningful on part pixels), hinge side (h, w) int64 (-1 off doors),
+        handle (h, w) float32)``.
     """
     pm = part_map[::stride, ::stride].astype(np.int64)
-    points = pixel_points(depth, fovy)[::stride, ::stride]
-    part = np.clip(pm - 1, 0, None)
-    axis = axis_cam[part].transpose(2, 0, 1)
-    offset = (origin_cam[part] - points).transpose(2, 0, 1)
+    h, w = pm.shape
+    n = len(joint_type) + 2
+    flat = (pm + 1).reshape(-1)
+    count = np.bincount(flat, minlength=n).astype(np.float64)
+    vv, uu = np.mgrid[0:h, 0:w]
+    cu = np.bincount(flat, weights=uu.reshape(-1), minlength=n) / np.maximum(count, 1)
+    cv = np.bincount(flat, weights=vv.reshape(-1), minlength=n) / np.maximum(count, 1)
+    centre = np.stack([cu[pm + 1] - uu, cv[pm + 1] - vv]) / CENTRE_SCALE
+    R = np.asarray(T_camera_cabinet)[:3, :3]
+    sides = np.full(n, -1, dtype=np.int64)
+    for k, jt in enumerate(joint_type):
+        if jt == 2:
+            sides[k + 2] = hinge_side_of(R.T @ axis_cam[k])
     return (
         class_targets(pm, joint_type),
-        axis.astype(np.float32),
-        offset.astype(np.float32),
-        points.astype(np.float32),
+        centre.astype(np.float32),
+        sides[pm + 1],
+        handle_map[::stride, ::stride].astype(np.float32),
     )
 
 
@@ -150,81 +182,10 @@ class ArticulationNet(nn.Module):
         return self.head(x)
 
 
-@dataclass(frozen=True)
-class PartHypothesis:
-    """One predicted part.
-
-    Attributes:
-        joint_type: ``fixed``, ``prismatic`` or ``revolute``.
-        confidence: mean softmax probability of that class over the part's pixels.
-        pixels: pixel count (at the network's resolution).
-        mask: boolean mask (H, W) at the network's resolution.
-        axis: unit joint axis in the camera frame (3,), or None for fixed parts.
-        origin: voted hinge origin in the camera frame (3,) [m], or None unless revolute.
-        centroid: mean 3D point of the part (3,) [m].
-    """
-
-    joint_type: str
-    confidence: float
-    pixels: int
-    mask: np.ndarray
-    axis: np.ndarray | None
-    origin: np.ndarray | None
-    centroid: np.ndarray
-
-
-def _door_axis(votes: np.ndarray, origin: np.ndarray, centroid: np.ndarray) -> np.ndarray:
-    """A hinge axis from per-pixel line votes (3, N): the principal direction of their
-    outer products (sign-free), signed so that a small positive turn about it moves the
-    door's centroid towards the camera (doors open outward, towards the robot)."""
-    v = votes / np.maximum(np.linalg.norm(votes, axis=0), 1e-9)
-    _, vecs = np.linalg.eigh(v @ v.T)
-    axis = vecs[:, -1]
-    velocity = np.cross(axis, centroid - origin)
-    return axis if velocity @ (-centroid) >= 0.0 else -axis
-
-
-def extract_parts(
-    output: np.ndarray, points: np.ndarray, min_pixels: int = 40
-) -> list[PartHypothesis]:
-    """Part hypotheses from one network output.
-
-    Args:
-        output: (N_OUT, H, W) network output for one view.
-        points: (H, W, 3) camera-frame points at the same resolution [m].
-        min_pixels: smaller regions are dropped.
-    """
-    logits = output[: len(CLASSES)]
-    prob = np.exp(logits - logits.max(axis=0))
-    prob /= prob.sum(axis=0)
-    label = prob.argmax(axis=0)
-    axis_map, offset_map = output[len(CLASSES) : len(CLASSES) + 3], output[len(CLASSES) + 3 :]
-    parts = []
-    for cls in (2, 3, 4):
-        n, comp = cv2.connectedComponents((label == cls).astype(np.uint8), connectivity=4)
-        for i in range(1, n):
-            mask = comp == i
-            count = int(mask.sum())
-            if count < min_pixels:
-                continue
-            kind = CLASSES[cls]
-            axis = origin = None
-            centroid = points[mask].mean(axis=0)
-            if cls == 3:
-                a = axis_map[:, mask].mean(axis=1)
-                axis = a / max(float(np.linalg.norm(a)), 1e-9)
-            if cls == 4:
-                origin = np.median(points[mask] + offset_map[:, mask].T, axis=0)
-                axis = _door_axis(axis_map[:, mask], origin, centroid)
-            parts.append(
-                PartHypothesis(
-                    joint_type=kind,
-                    confidence=float(prob[cls][mask].mean()),
-                    pixels=count,
-                    mask=mask,
-                    axis=axis,
-                    origin=origin,
-                    centroid=centroid,
-                )
-            )
-    return parts
+def load_network(path) -> tuple[ArticulationNet, int]:
+    """The network saved by ``tools/train_perception.py`` at ``path``, in eval mode, and
+    its input stride."""
+    ckpt = torch.load(path, weights_only=True, map_location="cpu")
+    net = ArticulationNet(int(ckpt["width"]))
+    net.load_state_dict(ckpt["state_dict"])
+    return net.eval(), int(ckpt["stride"])

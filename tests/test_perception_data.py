@@ -90,6 +90,56 @@ def test_the_head_looks_at_the_cabinet(viewer) -> None:
         assert abs(xs.mean() - v.part_map.shape[1] / 2) < v.part_map.shape[1] / 4
 
 
+def test_handle_pixels_are_handle_geoms(viewer) -> None:
+    """The pull-affordance labels: handle pixels lie on their part and on handle geoms."""
+    m, d = viewer.world.model, viewer.world.data
+    rng = np.random.default_rng(3)
+    seen = 0
+    for _ in range(4):
+        v = viewer.view(rng)
+        assert v.handle_map.dtype == bool and v.handle_map.shape == v.part_map.shape
+        assert np.all(v.part_map[v.handle_map] >= 1)  # handles belong to parts
+        pts, idx = depth_to_points(v.depth, v.T_world_camera, v.fovy)
+        mine = pts[v.handle_map.reshape(-1)[idx]]
+        if len(mine) < 10:
+            continue
+        handles = [g for g in range(m.ngeom) if "/handle" in m.geom(g).name]
+        inside = np.zeros(len(mine), dtype=bool)
+        for g in handles:
+            local = (mine - d.geom_xpos[g]) @ d.geom_xmat[g].reshape(3, 3)
+            centre, half = m.geom_aabb[g, :3], m.geom_aabb[g, 3:]
+            inside |= np.all(np.abs(local - centre) <= half + 0.003, axis=1)
+        assert inside.mean() > 0.99
+        seen += 1
+    has_handles = any(p.handle != "none" for p in viewer.world.scene.cabinet_spec.parts)
+    assert seen >= 1 if has_handles else seen == 0
+
+
+def test_empty_views_show_no_cabinet() -> None:
+    views = render_cabinet(7, views=3, ranges=ViewRanges(empty_prob=1.0))
+    for v in views:
+        assert (v.part_map == -1).all() and not v.handle_map.any() and v.pixels.sum() == 0
+        assert np.isfinite(v.depth).all()
+
+
+def test_look_around_sees_one_state_from_the_standard_poses() -> None:
+    from strug_manip.world.perception_data import render_episode
+    from strug_manip.world.views import MAX_VIEWS, look_poses
+
+    views = render_episode(9, views=4)
+    assert len(views) == 4
+    assert all(np.array_equal(v.q, views[0].q) for v in views)  # the cabinet does not move
+    cams = np.stack([v.T_world_camera[:3, 3] for v in views])
+    assert np.linalg.norm(cams[1] - cams[2]) > 0.4  # seen from both sides
+    assert all((v.part_map >= 0).mean() > 0.05 for v in views)
+    world = ManipulationWorld(SceneConfig(cabinet_seed=9))
+    try:
+        with pytest.raises(ConfigError, match=r"k \(views\) must be an integer in 1\.\."):
+            look_poses(world, MAX_VIEWS + 1)
+    finally:
+        world.close()
+
+
 def test_same_seed_same_views_bit_for_bit() -> None:
     a, b = render_cabinet(7, views=2), render_cabinet(7, views=2)
     for va, vb in zip(a, b, strict=True):
@@ -120,6 +170,8 @@ def test_dataset_shards_resume_without_repeating(tmp_path: Path) -> None:
         ({"distance": (0.0, 0.5)}, "distance must be > 0"),
         ({"open_prob": 1.5}, "open_prob"),
         ({"open_frac": (0.5, 1.2)}, "open_frac"),
+        ({"empty_prob": -0.1}, "empty_prob"),
+        ({"aim_jitter": float("nan")}, "aim_jitter"),
     ],
 )
 def test_view_ranges_are_validated(kwargs, match) -> None:

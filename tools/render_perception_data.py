@@ -2,7 +2,8 @@
 
 Usage::
 
-    python tools/render_perception_data.py --seeds 100000:100400 --out data/perception/train
+    python tools/render_perception_data.py --seeds 100000:100500 --out data/perception/train \
+        --empty-prob 0.05
     python tools/render_perception_data.py --seeds 0:100 --out data/perception/test \
         --picture docs/perception_data.png
 
@@ -25,6 +26,7 @@ import numpy as np
 
 from strug_manip.world.perception_data import (
     DEFAULT_VIEWS,
+    ViewRanges,
     render_cabinet,
     save_views,
     shard_path,
@@ -41,8 +43,9 @@ def _parse_seeds(text: str) -> list[int]:
     return list(range(lo, hi))
 
 
-def _render_one(seed: int, views: int, out: str) -> int:
-    save_views(shard_path(Path(out), seed), render_cabinet(seed, views))
+def _render_one(seed: int, views: int, out: str, empty_prob: float) -> int:
+    ranges = ViewRanges(empty_prob=empty_prob)
+    save_views(shard_path(Path(out), seed), render_cabinet(seed, views, ranges))
     return seed
 
 
@@ -74,6 +77,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--views", type=int, default=DEFAULT_VIEWS, help="views per cabinet")
     ap.add_argument("--out", type=Path, required=True)
     ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument(
+        "--empty-prob", type=float, default=0.0, help="share of views without the cabinet"
+    )
     ap.add_argument("--picture", type=Path, help="also write RGB | depth | parts of one shard")
     args = ap.parse_args(argv)
     from tqdm import tqdm
@@ -83,7 +89,9 @@ def main(argv: list[str] | None = None) -> int:
     print(f"{len(seeds) - len(todo)} of {len(seeds)} cabinets already in {args.out}")
     t0 = time.perf_counter()
     with ProcessPoolExecutor(max_workers=args.workers, mp_context=get_context("spawn")) as pool:
-        futures = [pool.submit(_render_one, s, args.views, str(args.out)) for s in todo]
+        futures = [
+            pool.submit(_render_one, s, args.views, str(args.out), args.empty_prob) for s in todo
+        ]
         for f in tqdm(as_completed(futures), total=len(futures), unit="cabinet"):
             f.result()
     seconds = time.perf_counter() - t0

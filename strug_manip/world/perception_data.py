@@ -8,6 +8,8 @@ view it stores
 
 * ``rgb`` (H, W, 3) uint8, ``depth`` (H, W) float32 [m] (distance along the optical
   axis; MuJoCo's far plane where nothing is hit);
+* ``handle_map`` (H, W) bool: the pixels of handle geometry (bars, their posts,
+  knobs; geoms named ``handle*``), where a pull grasps (the pull-affordance labels);
 * ``part_map`` (H, W) int16: ``-1`` not the cabinet, ``0`` the carcass (root link and
   every link rigidly fixed to it through a joint without a label), ``k >= 1`` the part
   of the k-th labelled joint (see below);
@@ -53,6 +55,7 @@ from planners.errors import ConfigError, check_positive_int
 from strug_manip.robot.fetch import BASE_JOINTS, HEAD_CAMERA, HEAD_JOINTS, TORSO_JOINT
 from strug_manip.world.scene import SceneConfig
 from strug_manip.world.sim import CameraFrame, ManipulationWorld
+from strug_manip.world.views import aim_head, look_poses, place_robot
 
 #: First generator seed of the training split; seeds below 10,000 are evaluation's.
 TRAIN_SEED_START = 100_000
@@ -73,6 +76,11 @@ class ViewRanges:
         torso: torso lift [m] (the joint's range is 0..0.386).
         open_prob: probability that a movable part is opened at all.
         open_frac: opening as a fraction of the joint's range, when opened.
+        empty_prob: probability that a view shows the scene without its cabinet (the
+            cabinet moved far away before rendering; every pixel is labelled -1), so a
+            network learns that an empty table is no cabinet.
+        aim_jitter: the head aims this far [m] (uniform per axis) off the cabinet's
+            centre, so the cabinet is not always at the image centre.
     """
 
     distance: tuple[float, float] = (0.6, 1.6)
@@ -81,6 +89,8 @@ class ViewRanges:
     torso: tuple[float, float] = (0.0, 0.38)
     open_prob: float = 0.5
     open_frac: tuple[float, float] = (0.1, 1.0)
+    empty_prob: float = 0.0
+    aim_jitter: float = 0.1
 
     def __post_init__(self) -> None:
         for name in ("distance", "lateral", "yaw", "torso", "open_frac"):
@@ -89,6 +99,10 @@ class ViewRanges:
                 raise ConfigError(f"ViewRanges.{name} must be (low, high) with low <= high")
         if self.distance[0] <= 0.0:
             raise ConfigError(f"ViewRanges.distance must be > 0 m, got {self.distance}")
+        if not (math.isfinite(self.aim_jitter) and self.aim_jitter >= 0.0):
+            raise ConfigError(f"ViewRanges.aim_jitter must be >= 0 m, got {self.aim_jitter}")
+        if not 0.0 <= self.empty_prob <= 1.0:
+            raise ConfigError(f"ViewRanges.empty_prob must be in [0, 1], got {self.empty_prob}")
         if not 0.0 <= self.open_prob <= 1.0:
             raise ConfigError(f"ViewRanges.open_prob must be in [0, 1], got {self.open_prob}")
         if not 0.0 <= self.open_frac[0] <= self.open_frac[1] <= 1.0:
@@ -102,6 +116,7 @@ class LabelledView:
     rgb: np.ndarray
     depth: np.ndarray
     part_map: np.ndarray
+    handle_map: np.ndarray
     joint_type: np.ndarray
     axis_cam: np.ndarray
     origin_cam: np.ndarray
@@ -143,10 +158,12 @@ class CabinetViewer:
             if j.child not in part_of_link:
                 part_of_link[j.child] = part_of_link.get(j.parent, 0)
         self._geom_part = np.full(m.ngeom + 1, -1, dtype=np.int16)  # last slot: background
+        self._geom_handle = np.zeros(m.ngeom + 1, dtype=bool)
         for g in range(m.ngeom):
             name = m.body(m.geom_bodyid[g]).name
             if name.startswith(pre) and name[len(pre) :] in part_of_link:
                 self._geom_part[g] = part_of_link[name[len(pre) :]]
+                self._geom_handle[g] = m.geom(g).name.rsplit("/", 1)[-1].startswith("handle")
         self._root_body = m.body(pre + obj.root).id
         self._jid = {j.name: m.joint(pre + j.name).id for j in self.joints if j.movable}
         self._qadr = {name: m.jnt_qposadr[jid] for name, jid in self._jid.items()}
@@ -184,29 +201,13 @@ class CabinetViewer:
             rng.uniform(*r.yaw)
         )
         d.qpos[adr[TORSO_JOINT]] = float(rng.uniform(*r.torso))
-        self._aim_head(self._cabinet_centre())
+        jitter = rng.uniform(-r.aim_jitter, r.aim_jitter, size=3)
+        aim_head(self.world, self._cabinet_centre() + jitter)
 
     def _cabinet_centre(self) -> np.ndarray:
         d, obj = self.world.data, self.world.scene.cabinet
         R = d.xmat[self._root_body].reshape(3, 3)
         return R @ obj.bounds.mean(axis=0) + d.xpos[self._root_body]
-
-    def _aim_head(self, target: np.ndarray, iterations: int = 4) -> None:
-        """Pan and tilt the head so that the camera's optical axis meets ``target``."""
-        m, d, adr = self.world.model, self.world.data, self._robot_qadr
-        pan_j, tilt_j = (m.joint(n) for n in HEAD_JOINTS)
-        for _ in range(iterations):
-            mujoco.mj_kinematics(m, d)
-            mujoco.mj_camlight(m, d)  # camera poses are not part of mj_kinematics
-            T, _ = self.world.camera_pose(HEAD_CAMERA)
-            to_target = T[:3, :3].T @ (target - T[:3, 3])  # camera frame; ahead is -z
-            pan_err = math.atan2(-to_target[0], -to_target[2])
-            tilt_err = math.atan2(-to_target[1], math.hypot(to_target[0], to_target[2]))
-            pan = d.qpos[adr[HEAD_JOINTS[0]]] + pan_err
-            tilt = d.qpos[adr[HEAD_JOINTS[1]]] + tilt_err  # Fetch: positive tilt looks down
-            d.qpos[adr[HEAD_JOINTS[0]]] = float(np.clip(pan, *pan_j.range))
-            d.qpos[adr[HEAD_JOINTS[1]]] = float(np.clip(tilt, *tilt_j.range))
-        mujoco.mj_forward(m, d)
 
     # --- rendering ---------------------------------------------------------------------
     def view(self, rng: np.random.Generator) -> LabelledView:
@@ -214,13 +215,40 @@ class CabinetViewer:
         w = self.world
         w.reset(self._open_parts(rng))
         self._place_robot(rng)
+        if rng.random() < self.ranges.empty_prob:
+            return self._empty_view()
         return self.label(w.render(HEAD_CAMERA))
+
+    def look_around(self, rng: np.random.Generator, k: int = 4) -> list[LabelledView]:
+        """One cabinet state (parts opened at random, as :meth:`view` does), seen from
+        the robot's ``k`` standard head poses (:func:`strug_manip.world.views.look_poses`):
+        what the robot perceives before its first skill."""
+        w = self.world
+        w.reset(self._open_parts(rng))
+        out = []
+        for pose in look_poses(w, k):
+            place_robot(w, pose)
+            out.append(self.label(w.render(HEAD_CAMERA)))
+        return out
+
+    def _empty_view(self) -> LabelledView:
+        """The same head pose with the cabinet moved 100 m away (an empty table)."""
+        m, d = self.world.model, self.world.data
+        adr = m.jnt_qposadr[m.joint(self.world.scene.cabinet_prefix + "free").id]
+        d.qpos[adr : adr + 2] += 100.0
+        mujoco.mj_forward(m, d)
+        try:
+            return self.label(self.world.render(HEAD_CAMERA))
+        finally:
+            d.qpos[adr : adr + 2] -= 100.0
+            mujoco.mj_forward(m, d)
 
     def label(self, frame: CameraFrame) -> LabelledView:
         """The labels of ``frame``, rendered from the world's current state."""
         d = self.world.data
         seg = np.where(frame.segmentation < 0, self._geom_part.size - 1, frame.segmentation)
         part_map = self._geom_part[seg]
+        handle_map = self._geom_handle[seg]
         T_cw = np.linalg.inv(frame.T_world_camera)
         T_world_cab = np.eye(4)
         T_world_cab[:3, :3] = d.xmat[self._root_body].reshape(3, 3)
@@ -249,6 +277,7 @@ class CabinetViewer:
             rgb=frame.rgb,
             depth=frame.depth.astype(np.float32),
             part_map=part_map,
+            handle_map=handle_map,
             joint_type=jtype,
             axis_cam=axis,
             origin_cam=origin,
@@ -285,6 +314,22 @@ def render_cabinet(
         world.close()
 
 
+def render_episode(
+    seed: int,
+    views: int = 4,
+    ranges: ViewRanges | None = None,
+    config: SceneConfig | None = None,
+) -> list[LabelledView]:
+    """The cabinet of ``seed`` in one random state, from the ``views`` standard head
+    poses (:meth:`CabinetViewer.look_around`); the same seed gives the same views."""
+    world = ManipulationWorld(dataclasses.replace(config or SceneConfig(), cabinet_seed=int(seed)))
+    try:
+        viewer = CabinetViewer(world, ranges)
+        return viewer.look_around(np.random.default_rng([int(seed), 0xE715]), views)
+    finally:
+        world.close()
+
+
 def shard_path(out: Path, seed: int) -> Path:
     """Where the views of cabinet ``seed`` are stored."""
     return Path(out) / f"cabinet_{int(seed):06d}.npz"
@@ -298,7 +343,7 @@ def save_views(path: Path, views: Sequence[LabelledView]) -> None:
     arrays = {
         name: np.stack([getattr(v, name) for v in views])
         for name in (
-            "rgb", "depth", "part_map", "joint_type", "axis_cam", "origin_cam", "q",
+            "rgb", "depth", "part_map", "handle_map", "joint_type", "axis_cam", "origin_cam", "q",
             "lower", "upper", "pixels", "T_world_camera", "T_camera_cabinet",
         )
     }  # fmt: skip

@@ -1,0 +1,639 @@
+"""Multi-view fusion: the views' part instances to one set of part hypotheses per
+cabinet, in the world frame.
+
+Steps (:func:`fuse`):
+
+1. **The front plane**, from the cabinet points of every view at once (the cabinet
+   stands upright on its table, so its front is a vertical plane; :func:`fit_front`).
+   It fixes the *front frame* ``F``: ``x`` the outward normal, ``z`` world up, ``y = z x x`` (the
+   generator's object axes), origin on the plane below the front's centre at the
+   carcass's lowest point. A drawer's axis is this normal; a door's hinge is an edge of
+   its panel; so joint axes come from hundreds of depth points instead of a learnt
+   per-pixel regression.
+2. **Per instance and view**, its *closed-state rectangle* on the front plane (``y0,
+   y1, z0, z1`` in ``F`` [m]) and its joint parameters under each interpretation: as a
+   drawer, its opening [m] (the front face's distance from the plane); as a door, the
+   hinge side and opening angle [rad]. An open door's hinge is the panel edge nearest
+   the front plane (geometry); a closed door's is the side the network votes for, times
+   the handle's cue (a handle sits near the free edge). A side door open by theta looks
+   exactly like the opposite-hinged door open by pi - theta; both are kept when
+   pi - theta is within :data:`SIDE_DOOR_MAX` (the larger generator limit), weighted by
+   the network. The geometry also weighs the joint type (:data:`GEOMETRY_EVIDENCE`): a
+   front moved out parallel to the plane is a drawer's, a panel turned out about an
+   edge on it a door's, a closed front's centred handle a drawer's.
+3. **Association**: instances of all views, smallest first, join the fused part whose
+   largest reading's closed-state rectangle overlaps theirs most (IoU >=
+   :data:`ASSOC_IOU`, the best pair of interpretations: as seen, or as a door hinged on
+   a side the geometry allows; one instance per view and part); an instance holding
+   most of two or more fused parts is a merged region: it counts as evidence that the
+   region holds several parts (``merged``) and adds to none. Each fused part gets class
+   probabilities (pixel-weighted mean over its views), hinge-side probabilities, an
+   existence probability (confidence-weighted share of the views that could see it
+   that did) and the spread of its rectangle and opening over the views. Pieces of one
+   open drawer (pulled out by the same centimetre, side by side) are joined.
+
+All lengths [m], angles [rad], frames ``T_world_frame`` (4, 4).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from perception.errors import NoCabinetError
+from perception.parts import Instance, ViewParts
+
+#: Distance of a point on the front plane from it [m].
+PLANE_TOL = 0.006
+#: A door panel tilted by more than this from the front plane is open [rad].
+DOOR_OPEN_TILT = math.radians(12.0)
+#: Largest side-door opening the generator makes (2.10 rad) plus a margin [rad].
+SIDE_DOOR_MAX = 2.2
+#: Instances whose closed-state rectangles overlap at least this much (IoU, best pair
+#: of interpretations) are one part.
+ASSOC_IOU = 0.3
+#: A front narrower or lower than this is a measurement failure [m] (the generator's
+#: smallest cabinet is 0.35 x 0.30 m).
+MIN_FRONT = 0.2
+#: Depth of the carcass when its top and sides are not seen: the middle of the
+#: generator's 0.30-0.45 m range [m].
+DEFAULT_DEPTH = 0.375
+#: The gap between a front and its cell [m] and a front's thickness [m] (the middle of
+#: the generator's 0.002-0.004 and 0.015-0.022 m).
+FRONT_GAP, FRONT_THICKNESS = 0.003, 0.018
+#: Likelihood of the joint types a part's geometry rules out (per view it is seen in).
+GEOMETRY_EVIDENCE = 0.2
+#: Sharpness of the handle's hinge-side cue (:func:`_handle_cue`).
+HANDLE_CUE = 6.0
+#: Hinge sides, as :data:`perception.articulation_net.HINGE_SIDES`.
+SIDES = ("left", "right", "top", "bottom")
+#: Joint types of a fused part's class probabilities.
+TYPES = ("fixed", "prismatic", "revolute")
+
+
+@dataclass(frozen=True)
+class FrontFrame:
+    """The cabinet's front, as seen.
+
+    Attributes:
+        T_world_front: (4, 4): x outward normal, z up, origin on the front plane at the
+            front's lateral centre and the carcass's lowest point.
+        width, height: extents of the front [m] (y and z in the front frame).
+        depth: the carcass depth behind the front [m]; ``depth_seen``: whether it was
+            measured (else :data:`DEFAULT_DEPTH`).
+        inliers: front-plane points found.
+    """
+
+    T_world_front: np.ndarray
+    width: float
+    height: float
+    depth: float
+    depth_seen: bool
+    inliers: int
+
+    def to_front(self, p: np.ndarray) -> np.ndarray:
+        """World points (..., 3) in the front frame."""
+        T = self.T_world_front
+        return (np.asarray(p) - T[:3, 3]) @ T[:3, :3]
+
+    def to_world(self, p: np.ndarray) -> np.ndarray:
+        """Front-frame points (..., 3) in the world."""
+        T = self.T_world_front
+        return np.asarray(p) @ T[:3, :3].T + T[:3, 3]
+
+    def dir_to_world(self, v: np.ndarray) -> np.ndarray:
+        """A front-frame direction (3,) in the world."""
+        return self.T_world_front[:3, :3] @ np.asarray(v, dtype=float)
+
+
+@dataclass(frozen=True)
+class Reading:
+    """One instance of one view, interpreted (front frame).
+
+    Attributes:
+        rect: (4,) the closed-state rectangle ``y0, y1, z0, z1`` [m] it is associated
+            by (as an open door if it is one and the network says door, else as seen).
+        face_rect: (4,) the rectangle as a drawer or panel (the seen front) [m].
+        q_drawer: its opening if a drawer [m].
+        door_rect: (4, 4) closed rectangle per hinge side; door_q: (4,) opening per side
+            [rad]; door_ok: (4,) which sides are geometrically possible.
+        closed_door: the panel lies in the front plane.
+        depth_x: median front-frame x of its points [m] (shelves lie deep inside).
+        evidence: (3,) likelihood of fixed, prismatic, revolute from the geometry alone
+            (:data:`GEOMETRY_EVIDENCE`): a front moved out parallel to the front plane is
+            a drawer's; a panel turned out of it about an edge on it, a door's.
+    """
+
+    view: int
+    instance: Instance
+    rect: np.ndarray
+    face_rect: np.ndarray
+    q_drawer: float
+    door_rect: np.ndarray
+    door_q: np.ndarray
+    door_ok: np.ndarray
+    closed_door: bool
+    depth_x: float
+    evidence: np.ndarray = field(default_factory=lambda: np.ones(3))
+
+
+@dataclass
+class PartHypothesis:
+    """One fused part (front frame; see the module docstring).
+
+    Attributes:
+        rect: (4,) closed-state rectangle as a drawer or panel [m]; rect_std: its
+            spread over the views [m].
+        class_prob: (3,) fixed, prismatic, revolute.
+        existence: probability that the part exists.
+        hinge_prob: (4,) over :data:`SIDES`, geometry and network combined.
+        door_rect: (4, 4) closed rectangle per side; door_q: (4,) opening per side [rad].
+        q_drawer: opening as a drawer [m]; q_std: its spread [m].
+        handle: (3,) front-frame grasp point, or None; handle_score: its affordance.
+        views: views it was seen in; visible: views that could see it; merged: views in
+            which it was part of a larger merged region.
+        shelf: a fixed part lying deep in its cell (an open shelf board, not a panel).
+    """
+
+    rect: np.ndarray
+    rect_std: np.ndarray
+    class_prob: np.ndarray
+    existence: float
+    hinge_prob: np.ndarray
+    door_rect: np.ndarray
+    door_q: np.ndarray
+    q_drawer: float
+    q_std: float
+    handle: np.ndarray | None
+    handle_score: float
+    views: int
+    visible: int
+    merged: int
+    shelf: bool
+    readings: list[Reading] = field(default_factory=list, repr=False)
+
+    @property
+    def joint_type(self) -> str:
+        """The most probable joint type."""
+        return TYPES[int(np.argmax(self.class_prob))]
+
+    @property
+    def side(self) -> str:
+        """The most probable hinge side."""
+        return SIDES[int(np.argmax(self.hinge_prob))]
+
+
+@dataclass(frozen=True)
+class FusedCabinet:
+    """The fusion's result: the front and the part hypotheses (largest first)."""
+
+    front: FrontFrame
+    parts: list[PartHypothesis]
+    seconds: float
+
+
+# --- the front plane ------------------------------------------------------------------
+def fit_front(
+    points: np.ndarray, normals: np.ndarray, carcass: np.ndarray, cameras: np.ndarray
+) -> tuple[np.ndarray, float, np.ndarray]:
+    """The cabinet's front: a vertical plane facing the cameras.
+
+    The normal: drawer fronts, closed doors, panels and the carcass's front edges all
+    share it, so it is the peak of the histogram (1 deg bins) of the horizontal
+    directions of the points' surface normals that face the cameras within 60 deg,
+    refined by the mean of the normals within 4 deg of the peak. The offset: the points'
+    offsets along the normal (4 mm bins) have peaks at the front, at open drawers' fronts
+    (in front of it, no carcass), at the back panel seen through open cells (behind it)
+    and at thin carcass-looking strips (an open door's edge); the front is the peak with
+    the most carcass points on it less twice the carcass points 2 cm or more in front of
+    it (the carcass lies behind its front).
+
+    Args:
+        points: (N, 3) world points of the cabinet [m]; normals: (N, 3) their unit
+            normals (zero if unknown).
+        carcass: (N,) bool, the points classed carcass.
+        cameras: (K, 3) camera positions [m].
+
+    Returns:
+        ``(unit horizontal normal (3,), offset d with n . p = d on the plane [m],
+        inlier mask (N,))``.
+    """
+    eye = cameras.mean(axis=0)
+    to_eye = eye[:2] - points[:, :2]
+    to_eye /= np.maximum(np.linalg.norm(to_eye, axis=1, keepdims=True), 1e-9)
+    h = normals[:, :2]
+    hn = np.linalg.norm(h, axis=1)
+    use = (np.abs(normals[:, 2]) < 0.5) & (hn > 0.5)
+    use &= (h * to_eye).sum(axis=1) > 0.5 * np.maximum(hn, 1e-9)
+    if use.sum() < 20:
+        raise NoCabinetError("no vertical cabinet front facing the camera was found")
+    yaw = np.degrees(np.arctan2(h[use, 1], h[use, 0]))
+    hist = np.bincount(np.floor(yaw + 180.0).astype(int) % 360, minlength=360)
+    smooth = hist + np.roll(hist, 1) + np.roll(hist, -1)
+    peak = np.radians(int(np.argmax(smooth)) + 0.5 - 180.0)
+    near = np.abs((yaw - np.degrees(peak) + 180.0) % 360.0 - 180.0) < 4.0
+    m = h[use][near].mean(axis=0)
+    n = np.array([m[0], m[1], 0.0]) / np.linalg.norm(m)
+    off = points @ n
+    lo = off.min()
+    idx = ((off - lo) / 0.004).astype(int)
+    hist = np.bincount(idx)
+    hist_c = np.bincount(idx[carcass], minlength=len(hist))
+    smooth = np.convolve(hist, np.ones(3), "same")
+    smooth_c = np.convolve(hist_c, np.ones(3), "same")
+    peaks = [
+        k for k in range(len(smooth))
+        if smooth[k] == smooth[max(0, k - 2) : k + 3].max() and smooth[k] >= 0.05 * smooth.max()
+    ]  # fmt: skip
+    # Carcass on the plane, minus twice the carcass in front of it (2 cm and more).
+    ahead = np.cumsum(hist_c[::-1])[::-1]  # carcass points in bin k and beyond
+    score = [smooth_c[k] - 2.0 * (ahead[k + 5] if k + 5 < len(ahead) else 0) for k in peaks]
+    k = peaks[int(np.argmax(score))] if peaks else int(np.argmax(smooth))
+    d = float(lo + (k + 0.5) * 0.004)
+    inl = np.abs(off - d) < PLANE_TOL
+    d = float(np.median(off[inl]))
+    return n, d, np.abs(off - d) < PLANE_TOL
+
+
+def _run(v: np.ndarray, bin_size: float = 0.01, max_gap: int = 8) -> tuple[float, float]:
+    """The extent of the contiguous run (gaps of at most ``max_gap`` empty bins) of the
+    values ``v`` [m] that holds their median: stray points (a table pixel called
+    carcass) outside the cabinet do not widen it."""
+    lo = float(v.min())
+    idx = ((v - lo) / bin_size).astype(int)
+    occupied = np.bincount(idx) > 0
+    k0 = k1 = int((np.median(v) - lo) / bin_size)
+    gap = 0
+    while k1 + 1 < len(occupied) and gap <= max_gap:
+        k1 += 1
+        gap = 0 if occupied[k1] else gap + 1
+    k1 -= gap
+    gap = 0
+    while k0 > 0 and gap <= max_gap:
+        k0 -= 1
+        gap = 0 if occupied[k0] else gap + 1
+    k0 += gap
+    inside = v[(idx >= k0) & (idx <= k1)]
+    return float(inside.min()), float(inside.max())
+
+
+def front_frame(views: Sequence[ViewParts]) -> FrontFrame:
+    """The :class:`FrontFrame` from the cabinet points of every view."""
+    seen = [v for v in views if v.sees_cabinet]
+    if not seen:
+        raise NoCabinetError(
+            f"no cabinet in view: at most {max((len(v.cabinet_points) for v in views), default=0)} "
+            "cabinet pixels in any of the views"
+        )
+    pts = np.concatenate([v.cabinet_points for v in seen])
+    cams = np.stack([v.T_world_camera[:3, 3] for v in seen])
+    carcass = np.concatenate([v.cabinet_class == 1 for v in seen])
+    normals = np.concatenate([v.cabinet_normals for v in seen])
+    n, d, inl = fit_front(pts, normals, carcass, cams)
+    z = np.array([0.0, 0.0, 1.0])
+    y = np.cross(z, n)
+    R = np.stack([n, y, z], axis=1)
+    local_y = pts @ y
+    local_z = pts[:, 2]
+    y0, y1 = _run(local_y[inl])
+    if y1 - y0 < MIN_FRONT:  # a broken run: fall back to the inliers' percentiles
+        y0, y1 = (float(v) for v in np.percentile(local_y[inl], [1.0, 99.0]))
+    z0, z_top = _run(local_z[inl])
+    if z_top - z0 < MIN_FRONT:
+        z0, z_top = (float(v) for v in np.percentile(local_z[inl], [1.0, 99.0]))
+    behind = d - pts @ n
+    body = (local_y > y0 - 0.02) & (local_y < y1 + 0.02) & (behind > -0.02) & (behind < 0.7)
+    body &= local_z < z_top + 0.02
+    # The carcass bottom lies at most a plinth and a board (10 cm) below the front's
+    # lowest point; below that, points called cabinet are the table or its legs.
+    body &= local_z > z0 - 0.1
+    z_bot = min(_run(local_z[body])[0], z0) if body.sum() > 20 else z0
+    depth_seen = float(np.percentile(behind[body], 99.0)) if body.sum() > 20 else 0.0
+    seen_ok = depth_seen > 0.25
+    T = np.eye(4)
+    T[:3, :3] = R
+    T[:3, 3] = n * d + y * (0.5 * (y0 + y1)) + z * z_bot  # n and y are horizontal
+    return FrontFrame(
+        T_world_front=T,
+        width=float(y1 - y0),
+        height=z_top - z_bot,
+        depth=float(np.clip(depth_seen, 0.25, 0.6)) if seen_ok else DEFAULT_DEPTH,
+        depth_seen=bool(seen_ok),
+        inliers=int(inl.sum()),
+    )
+
+
+# --- one instance ---------------------------------------------------------------------
+def _extent(v: np.ndarray) -> tuple[float, float]:
+    lo, hi = np.percentile(v, [1.0, 99.0])
+    return float(lo), float(hi)
+
+
+def _panel_plane(P: np.ndarray, iterations: int = 3) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A panel's plane from its points (N, 3), refitted on the points near it (within 1 cm
+    or twice the median residual): ``(centroid, unit normal with x >= 0, inliers)``.
+    Pixels of something else in the instance (the cell's inside seen past an open
+    door) would otherwise tilt the plane and widen the panel."""
+    pts = P
+    for _ in range(iterations):
+        c = pts.mean(axis=0)
+        _, _, vt = np.linalg.svd(pts - c, full_matrices=False)
+        res = np.abs((P - c) @ vt[2])
+        keep = res < max(0.01, 2.0 * float(np.median(res)))
+        if keep.sum() < 10:
+            break
+        pts = P[keep]
+    c = pts.mean(axis=0)
+    _, _, vt = np.linalg.svd(pts - c, full_matrices=False)
+    m = vt[2] if vt[2][0] >= 0 else -vt[2]
+    return c, m, pts
+
+
+def read_instance(view: int, inst: Instance, front: FrontFrame) -> Reading:
+    """Interpret one instance under every joint type (module docstring, step 2).
+
+    Rectangles are cells: the seen front's extents widened by :data:`FRONT_GAP`.
+    """
+    P = front.to_front(inst.points)
+    x = P[:, 0]
+    depth_x = float(np.median(x))
+    face = np.abs(x - depth_x) < 0.015
+    face = face if face.sum() >= 10 else np.ones_like(face)
+    ylo, yhi = _extent(P[face, 1])
+    zlo, zhi = _extent(P[face, 2])
+    g = FRONT_GAP
+    face_rect = np.array([ylo - g, yhi + g, zlo - g, zhi + g])
+    door_rect = np.tile(face_rect, (4, 1))
+    door_q = np.zeros(4)
+    ok = np.ones(4, dtype=bool)
+    c, m, P = _panel_plane(P)
+    tilt = math.acos(min(1.0, abs(float(m[0]))))
+    closed = tilt < DOOR_OPEN_TILT
+    primary = None
+    evidence = np.ones(3)
+    if closed and depth_x > 0.025:  # moved out, still parallel: only a drawer does that
+        evidence = np.array([GEOMETRY_EVIDENCE, 1.0, GEOMETRY_EVIDENCE])
+    if not closed:
+        ok[:] = False
+        side_door = abs(float(m[1])) > abs(float(m[2]))  # turned about a vertical line
+        e = np.array([-m[1], m[0], 0.0]) if side_door else np.cross(m, [0.0, 1.0, 0.0])
+        e /= max(np.linalg.norm(e), 1e-9)  # in the panel, across the hinge
+        s_lo, s_hi = _extent((P - c) @ e)
+        ends = (c + s_lo * e, c + s_hi * e)
+        hinge, free = ends if ends[0][0] <= ends[1][0] else ends[::-1]  # hinge: nearer the front
+        w = s_hi - s_lo
+        dirn = free - hinge
+        if abs(hinge[0]) < 0.04 and free[0] > 0.05:  # turned out about an edge on the front
+            evidence = np.array([GEOMETRY_EVIDENCE, GEOMETRY_EVIDENCE, 1.0])
+        if side_door:
+            theta = math.atan2(max(dirn[0], 0.0), abs(dirn[1]))
+            first, second = (0, 1) if dirn[1] > 0 else (1, 0)  # left if the free edge is to +y
+            y_h = float(hinge[1])
+            spans = {0: (y_h - g, y_h + w + g), 1: (y_h - w - g, y_h + g)}
+            for side, q in ((first, theta), (second, math.pi - theta)):
+                if q <= SIDE_DOOR_MAX:
+                    ok[side] = True
+                    door_q[side] = q
+                    door_rect[side] = [*spans[side], zlo - g, zhi + g]
+            primary = first
+        else:
+            theta = math.atan2(max(dirn[0], 0.0), abs(dirn[2]))
+            side = 2 if dirn[2] < 0 else 3  # top hinge if the free edge hangs below
+            # A top hinge sits on the panel's back face: the seen edge rose by about
+            # FRONT_THICKNESS * sin(theta) as it turned.
+            z_h = float(hinge[2]) - (FRONT_THICKNESS * math.sin(theta) if side == 2 else 0.0)
+            ylo2, yhi2 = _extent(P[:, 1])
+            span = (z_h - w - g, z_h + g) if side == 2 else (z_h - g, z_h + w + g)
+            ok[side] = True
+            door_q[side] = theta
+            door_rect[side] = [ylo2 - g, yhi2 + g, *span]
+            primary = side
+    as_door = primary is not None and inst.class_prob[2] >= inst.class_prob[1]
+    rect = door_rect[primary].copy() if as_door else face_rect
+    return Reading(
+        view, inst, rect, face_rect, max(depth_x, 0.0), door_rect, door_q, ok, closed, depth_x,
+        evidence,
+    )  # fmt: skip
+
+
+# --- association ----------------------------------------------------------------------
+def rect_iou(a: np.ndarray, b: np.ndarray) -> float:
+    """Intersection over union of two rectangles ``(y0, y1, z0, z1)``."""
+    iy = max(0.0, min(a[1], b[1]) - max(a[0], b[0]))
+    iz = max(0.0, min(a[3], b[3]) - max(a[2], b[2]))
+    inter = iy * iz
+    union = (a[1] - a[0]) * (a[3] - a[2]) + (b[1] - b[0]) * (b[3] - b[2]) - inter
+    return inter / union if union > 0 else 0.0
+
+
+def _covered(inner: np.ndarray, outer: np.ndarray) -> float:
+    """Share of ``inner``'s area inside ``outer``."""
+    iy = max(0.0, min(inner[1], outer[1]) - max(inner[0], outer[0]))
+    iz = max(0.0, min(inner[3], outer[3]) - max(inner[2], outer[2]))
+    area = (inner[1] - inner[0]) * (inner[3] - inner[2])
+    return iy * iz / area if area > 0 else 0.0
+
+
+def _visible(rect: np.ndarray, front: FrontFrame, view: ViewParts) -> bool:
+    """Whether the rectangle's centre projects into ``view``'s image."""
+    p = front.to_world(np.array([0.0, 0.5 * (rect[0] + rect[1]), 0.5 * (rect[2] + rect[3])]))
+    T = view.T_world_camera
+    pc = T[:3, :3].T @ (p - T[:3, 3])
+    if pc[2] >= -0.05:
+        return False
+    h, w = view.shape
+    f = 0.5 * h / math.tan(0.5 * view.fovy)
+    u, v = pc[0] / -pc[2] * f + 0.5 * w, -pc[1] / -pc[2] * f + 0.5 * h
+    return 0 <= u < w and 0 <= v < h
+
+
+def _handle_cue(handle: np.ndarray, rect: np.ndarray) -> np.ndarray:
+    """Hinge-side likelihoods (4,) from where a closed door's handle sits: handles are
+    near the free edge (the generator puts them 3-6 cm in from it), so a handle right of
+    the centre (+y) means a left hinge, one below the centre a top hinge."""
+    u = (handle[1] - 0.5 * (rect[0] + rect[1])) / max(0.5 * (rect[1] - rect[0]), 1e-3)
+    v = (handle[2] - 0.5 * (rect[2] + rect[3])) / max(0.5 * (rect[3] - rect[2]), 1e-3)
+    e = np.exp(HANDLE_CUE * np.array([u, -u, -v, v]))
+    return e / e.sum()
+
+
+def _handle_class_cue(handle: np.ndarray, rect: np.ndarray) -> np.ndarray:
+    """Joint-type likelihoods (3,) from a closed front's handle: fixed fronts have none; a
+    drawer's is centred; a door's is near its free edge (at least half-way from the
+    centre to the edge, as the generator and most furniture place them)."""
+    u = (handle[1] - 0.5 * (rect[0] + rect[1])) / max(0.5 * (rect[1] - rect[0]), 1e-3)
+    v = (handle[2] - 0.5 * (rect[2] + rect[3])) / max(0.5 * (rect[3] - rect[2]), 1e-3)
+    off = max(abs(u), abs(v))
+    g = GEOMETRY_EVIDENCE
+    if off < 0.3:
+        return np.array([g, 1.0, g])
+    if off > 0.45:
+        return np.array([g, g, 1.0])
+    return np.array([g, 1.0, 1.0])
+
+
+def _summarise(
+    group: list[Reading], merged: int, visible: int, front: FrontFrame
+) -> PartHypothesis:
+    wts = np.array([r.instance.pixels for r in group], dtype=float)
+    wts /= wts.sum()
+    rects = np.stack([r.face_rect for r in group])
+    rect = np.median(rects, axis=0) if len(group) > 2 else (wts[:, None] * rects).sum(axis=0)
+    cls = (wts[:, None] * np.stack([r.instance.class_prob for r in group])).sum(axis=0)
+    cls = cls * np.prod(np.stack([r.evidence for r in group]), axis=0) + 1e-9
+    net = (wts[:, None] * np.stack([r.instance.hinge_prob for r in group])).sum(axis=0)
+    # Geometry: an open panel allows only the sides it can be hinged on.
+    ok = np.all(np.stack([r.door_ok for r in group]), axis=0)
+    if not ok.any():
+        ok = np.stack([r.door_ok for r in group]).any(axis=0)
+    hinge = np.where(ok, net, 0.0) + 1e-6
+    door_q = np.zeros(4)
+    door_rect = np.tile(rect, (4, 1))
+    for k in range(4):
+        rows = [r for r in group if r.door_ok[k]]
+        if rows:
+            door_q[k] = float(np.median([r.door_q[k] for r in rows]))
+            door_rect[k] = np.median(np.stack([r.door_rect[k] for r in rows]), axis=0)
+    conf = sum(r.instance.part_prob for r in group)
+    existence = (conf + 0.1) / (max(visible, len(group)) + 0.2)
+    handles = [
+        (r.instance.handle, r.instance.handle_score) for r in group if r.instance.handle is not None
+    ]
+    handle = (
+        front.to_front(np.median(np.stack([h for h, _ in handles]), axis=0)) if handles else None
+    )
+    if handle is not None and all(r.closed_door for r in group):
+        hinge = hinge * _handle_cue(handle, rect)
+        cls = cls * _handle_class_cue(handle, rect)
+    return PartHypothesis(
+        rect=rect,
+        rect_std=rects.std(axis=0),
+        class_prob=cls / cls.sum(),
+        existence=float(min(existence, 1.0)),
+        hinge_prob=hinge / hinge.sum(),
+        door_rect=door_rect,
+        door_q=door_q,
+        q_drawer=float(np.median([r.q_drawer for r in group])),
+        q_std=float(np.std([r.q_drawer for r in group])),
+        handle=handle,
+        handle_score=float(max((s for _, s in handles), default=0.0)),
+        views=len({r.view for r in group}),
+        visible=visible,
+        merged=merged,
+        shelf=float(np.median([r.depth_x for r in group])) < -0.04,
+        readings=group,
+    )
+
+
+def _candidates(r: Reading) -> list[np.ndarray]:
+    """The closed-state rectangles a reading may stand for: as seen, as associated, and
+    as a door hinged on each side its geometry allows."""
+    return [r.rect, r.face_rect, *(r.door_rect[k] for k in range(4) if r.door_ok[k])]
+
+
+def fuse(views: Sequence[ViewParts]) -> FusedCabinet:
+    """Fuse the views of one cabinet (module docstring).
+
+    Raises:
+        NoCabinetError: no view shows a cabinet.
+    """
+    t0 = time.perf_counter()
+    front = front_frame(views)
+    readings = [
+        read_instance(i, inst, front)
+        for i, v in enumerate(views)
+        if v.sees_cabinet
+        for inst in v.instances
+    ]
+    # A part lies on the cabinet's front: a reading mostly outside it is no part.
+    box = np.array(
+        [-0.5 * front.width - 0.05, 0.5 * front.width + 0.05, -0.05, front.height + 0.05]
+    )
+    readings = [r for r in readings if _covered(r.rect, box) > 0.8]
+    readings.sort(key=lambda r: (r.instance.pixels, r.view))
+    groups: list[list[Reading]] = []
+    refs: list[Reading] = []  # each group's largest reading
+    merged: list[int] = []
+    for r in readings:
+        cands = _candidates(r)
+        # A merged region: it covers two or more parts that each fill little of it.
+        covered = [
+            k for k, g in enumerate(refs)
+            if _covered(g.rect, r.rect) > 0.7 and rect_iou(g.rect, r.rect) < 0.6
+        ]  # fmt: skip
+        if len(covered) >= 2:
+            for k in covered:
+                merged[k] += 1
+            continue
+        scores = [max(rect_iou(a, b) for a in cands for b in _candidates(g)) for g in refs]
+        free = [
+            k for k in np.argsort(scores)[::-1]
+            if scores[k] >= ASSOC_IOU and all(g.view != r.view for g in groups[k])
+        ]  # fmt: skip
+        if free:
+            groups[free[0]].append(r)
+            if r.instance.pixels > refs[free[0]].instance.pixels:
+                refs[free[0]] = r
+        else:
+            groups.append([r])
+            refs.append(r)
+            merged.append(0)
+    parts = []
+    for grp, mg in zip(groups, merged, strict=True):
+        rect = np.median(np.stack([g.rect for g in grp]), axis=0)
+        visible = sum(_visible(rect, front, v) for v in views if v.sees_cabinet)
+        parts.append(_summarise(grp, mg, visible, front))
+    parts = _join_open_fragments(parts)
+    parts.sort(key=lambda p: -(p.rect[1] - p.rect[0]) * (p.rect[3] - p.rect[2]))
+    return FusedCabinet(front, parts, time.perf_counter() - t0)
+
+
+def _join_open_fragments(parts: list[PartHypothesis]) -> list[PartHypothesis]:
+    """Join drawer hypotheses that are pieces of one open drawer front: both pulled out
+    (more than 2 cm) by the same amount (within 1 cm), side by side or one above the
+    other within 8 cm, spanning the same rows or columns. Two real drawers are never
+    pulled out by the same centimetre by chance; at the front plane a divider would
+    separate them."""
+    out = list(parts)
+    joined = True
+    while joined:
+        joined = False
+        for i in range(len(out)):
+            for j in range(i + 1, len(out)):
+                a, b = out[i], out[j]
+                if a.joint_type != "prismatic" or b.joint_type != "prismatic":
+                    continue
+                if min(a.q_drawer, b.q_drawer) < 0.02 or abs(a.q_drawer - b.q_drawer) > 0.01:
+                    continue
+                ra, rb = a.rect, b.rect
+                gap_y = max(ra[0], rb[0]) - min(ra[1], rb[1])
+                gap_z = max(ra[2], rb[2]) - min(ra[3], rb[3])
+                span_z = min(ra[3], rb[3]) - max(ra[2], rb[2])
+                span_y = min(ra[1], rb[1]) - max(ra[0], rb[0])
+                side = gap_y < 0.08 and span_z > 0.8 * min(ra[3] - ra[2], rb[3] - rb[2])
+                stack = gap_z < 0.08 and span_y > 0.8 * min(ra[1] - ra[0], rb[1] - rb[0])
+                if not (side or stack):
+                    continue
+                rect = np.array([min(ra[0], rb[0]), max(ra[1], rb[1]),
+                                 min(ra[2], rb[2]), max(ra[3], rb[3])])  # fmt: skip
+                big, small = (a, b) if a.views * a.existence >= b.views * b.existence else (b, a)
+                out[i] = dataclasses.replace(
+                    big,
+                    rect=rect,
+                    door_rect=np.tile(rect, (4, 1)),
+                    existence=max(a.existence, b.existence),
+                    views=max(a.views, b.views),
+                    handle=big.handle if big.handle is not None else small.handle,
+                    readings=big.readings + small.readings,
+                )
+                del out[j]
+                joined = True
+                break
+            if joined:
+                break
+    return out

@@ -1,0 +1,395 @@
+"""The initial belief: M particles of complete cabinet models from perception's fused
+part hypotheses.
+
+:func:`initial_belief` runs perception on the robot's views (clean, and
+:attr:`BeliefConfig.noisy_runs` more times on inputs with sensor noise added), fuses each
+run, and :func:`sample_particles` draws particles from those fusions. A particle is a
+:class:`Particle`: a :class:`~strug_manip.objects.assembly.CabinetModel` (which parts
+exist; each part's kind, rectangle, joint axis, origin, limits, current position and
+handle), its compiled :class:`~strug_manip.objects.generator.CabinetSpec` and the
+parts' joint positions, so every particle can be simulated
+(``ManipulationWorld.from_cabinet_spec(p.spec)``, then ``reset(p.q)``).
+
+The paper adds noise to the network's inputs, class predictions and joint parameters
+because its network "had a tendency to be confidently incorrect". Here (per particle,
+per part; defaults in :class:`BeliefConfig`):
+
+* **inputs**: the particle's fusion is drawn from the clean run and the noisy-input runs;
+* **classes**: the fused class probabilities are flattened (``p ** (1 / T)``) and every
+  class keeps at least ``class_floor``: a drawer/door **flip** is always possible;
+* **parameters**: axes turn by a random angle (``axis_noise`` [rad] per tangent
+  direction), origins and rectangles shift (``origin_noise``, ``rect_noise`` [m]),
+  openings vary by their spread over the views (at least ``q_noise``);
+* **hinge side**: sampled from the fused side probabilities, every side the geometry
+  allows keeping at least ``hinge_floor``: a closed door's opening sense is never
+  certain from one look;
+* **existence**: a part exists with its fused existence probability, clipped to
+  ``existence_range``;
+* **split**: a movable hypothesis large enough to hold two cells (at least twice the
+  generator's smallest cell along its long side) is split in two with probability
+  ``split_base`` plus ``split_merged`` times the share of views that saw it merged.
+
+Limits, damping and friction cannot be seen: they are drawn from the generator's
+documented ranges (:mod:`strug_manip.objects.generator`), limits never below the
+opening seen. Particles depend only on perception's outputs and the generator's
+documented ranges, never on a true cabinet.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from perception.fusion import SIDES, FusedCabinet, PartHypothesis, fuse
+from perception.inputs import View, check_view
+from perception.parts import Perceiver
+from planners.errors import ConfigError, check_positive_int
+from strug_manip.objects import generator as gen
+from strug_manip.objects.assembly import FRONT, GAP, CabinetModel, PartModel, assemble
+from strug_manip.objects.generator import CabinetSpec, axis_angle
+
+#: Opening axis of a door hinged on each side, front frame (the generator's e x n).
+SIDE_AXES = {
+    "left": np.array([0.0, 0.0, -1.0]),
+    "right": np.array([0.0, 0.0, 1.0]),
+    "top": np.array([0.0, -1.0, 0.0]),
+    "bottom": np.array([0.0, 1.0, 0.0]),
+}
+
+
+@dataclass(frozen=True)
+class BeliefConfig:
+    """How particles are drawn (module docstring); every field's default is given.
+
+    Attributes:
+        particles: M = 50.
+        noisy_runs: extra perception runs on noisy inputs = 2.
+        depth_noise: sensor noise on depth for those runs = 0.004 [m] (std, per pixel).
+        rgb_noise: noise on colour for those runs = 6 (std, 0..255 scale).
+        class_temperature: T = 2.
+        class_floor: 0.05.
+        hinge_floor: 0.05.
+        existence_range: (0.05, 0.98).
+        axis_noise: 0.03 [rad] (std per tangent direction, about 2.4 deg).
+        origin_noise: 0.008 [m]; rect_noise: 0.006 [m]; q_noise: 0.01 [m or rad].
+        split_base: 0.1; split_merged: 0.5.
+        min_cell: 0.12 [m] (the generator's smallest cell height).
+    """
+
+    particles: int = 50
+    noisy_runs: int = 2
+    depth_noise: float = 0.004
+    rgb_noise: float = 6.0
+    class_temperature: float = 2.0
+    class_floor: float = 0.05
+    hinge_floor: float = 0.05
+    existence_range: tuple[float, float] = (0.05, 0.98)
+    axis_noise: float = 0.03
+    origin_noise: float = 0.008
+    rect_noise: float = 0.006
+    q_noise: float = 0.01
+    split_base: float = 0.1
+    split_merged: float = 0.5
+    min_cell: float = 0.12
+
+    def __post_init__(self) -> None:
+        check_positive_int("particles", self.particles)
+        check_positive_int("noisy_runs", self.noisy_runs, allow_zero=True)
+        for name in (
+            "depth_noise",
+            "rgb_noise",
+            "axis_noise",
+            "origin_noise",
+            "rect_noise",
+            "q_noise",
+            "split_base",
+            "split_merged",
+            "class_floor",
+            "hinge_floor",
+        ):
+            v = getattr(self, name)
+            if not (isinstance(v, int | float) and math.isfinite(v) and v >= 0):
+                raise ConfigError(f"BeliefConfig.{name} must be a finite number >= 0, got {v!r}")
+        if not self.class_temperature > 0:
+            raise ConfigError(
+                f"BeliefConfig.class_temperature must be > 0, got {self.class_temperature!r}"
+            )
+        lo, hi = self.existence_range
+        if not 0.0 <= lo <= hi <= 1.0:
+            raise ConfigError(
+                "BeliefConfig.existence_range must be 0 <= lo <= hi <= 1, "
+                f"got {self.existence_range}"
+            )
+        if self.class_floor > 1 / 3 or self.hinge_floor > 1 / 4:
+            raise ConfigError("class_floor must be <= 1/3 and hinge_floor <= 1/4")
+
+
+@dataclass(frozen=True)
+class Particle:
+    """One complete cabinet model.
+
+    Attributes:
+        model: the cabinet as believed (front frame).
+        spec: its compiled description (``ManipulationWorld.from_cabinet_spec``).
+        q: its parts' current joint positions ``{joint name: q}``.
+        source: per part of ``spec`` (in order), the index of the fused hypothesis it
+            comes from.
+        run: which perception run (0 clean, then the noisy ones) it was drawn from.
+    """
+
+    model: CabinetModel
+    spec: CabinetSpec
+    q: dict[str, float]
+    source: tuple[int, ...]
+    run: int
+
+
+def noisy_view(view: View, rng: np.random.Generator, depth_noise: float, rgb_noise: float) -> View:
+    """``view`` with Gaussian noise on depth [m] and colour (dropouts stay dropouts)."""
+    depth = view.depth + rng.normal(0.0, depth_noise, view.depth.shape).astype(np.float32)
+    rgb = np.clip(view.rgb + rng.normal(0.0, rgb_noise, view.rgb.shape), 0, 255).astype(np.uint8)
+    return dataclasses.replace(view, depth=np.where(view.valid, depth, view.depth), rgb=rgb)
+
+
+def _tilt(axis: np.ndarray, sigma: float, rng: np.random.Generator) -> np.ndarray:
+    """``axis`` turned by Gaussian angles (std ``sigma`` [rad]) about two normals."""
+    a = np.asarray(axis, float) / np.linalg.norm(axis)
+    t1 = np.cross(a, [0.0, 0.0, 1.0] if abs(a[2]) < 0.9 else [1.0, 0.0, 0.0])
+    t1 /= np.linalg.norm(t1)
+    t2 = np.cross(a, t1)
+    out = a + sigma * (rng.normal() * t1 + rng.normal() * t2)
+    return out / np.linalg.norm(out)
+
+
+def _floored(p: np.ndarray, floor: float, allowed: np.ndarray | None = None) -> np.ndarray:
+    allowed = np.ones(len(p), dtype=bool) if allowed is None else allowed
+    p = np.where(allowed, np.maximum(p, floor), 0.0)
+    return p / p.sum()
+
+
+def _closed_handle(
+    h: PartHypothesis, kind: str, axis: np.ndarray, origin: np.ndarray, q: float
+) -> np.ndarray | None:
+    """The seen grasp point moved back to where it is with the part closed."""
+    if h.handle is None:
+        return None
+    if kind == "drawer":
+        return h.handle - q * axis
+    return origin + axis_angle(axis, -q) @ (h.handle - origin)
+
+
+def _draw_part(
+    h: PartHypothesis, depth: float, cfg: BeliefConfig, rng: np.random.Generator
+) -> list[PartModel]:
+    """The part(s) one hypothesis contributes to one particle (none if it does not exist)."""
+    lo, hi = cfg.existence_range
+    if rng.random() >= float(np.clip(h.existence, lo, hi)):
+        return []
+    p = h.class_prob ** (1.0 / cfg.class_temperature)
+    kind_i = int(rng.choice(3, p=_floored(p / p.sum(), cfg.class_floor)))
+    if kind_i == 0:
+        kind = "shelf" if h.shelf else "panel"
+        rect = h.rect + rng.normal(0.0, cfg.rect_noise, 4)
+        return [PartModel(kind, tuple(rect), np.zeros(3), np.zeros(3))] if _ok(rect) else []
+    if kind_i == 1:
+        rect = h.rect + rng.normal(0.0, cfg.rect_noise, 4)
+        rects = [r for r in _maybe_split(rect, h, cfg, rng) if _ok(r)]
+        q = max(0.0, h.q_drawer + rng.normal(0.0, max(h.q_std, cfg.q_noise)))
+        out = []
+        for r in rects:
+            axis = _tilt(np.array([1.0, 0.0, 0.0]), cfg.axis_noise, rng)
+            origin = np.array([0.0, 0.5 * (r[0] + r[1]), 0.5 * (r[2] + r[3])]) + rng.normal(
+                0.0, cfg.origin_noise, 3
+            )
+            box_depth = 0.875 * (depth - FRONT - 0.01)
+            upper = max(float(rng.uniform(*gen.DRAWER_TRAVEL_FRAC)) * box_depth, q + 0.01)
+            handle = _closed_handle(h, "drawer", axis, origin, q) if len(rects) == 1 else None
+            out.append(
+                PartModel(
+                    "drawer",
+                    tuple(r),
+                    axis,
+                    origin,
+                    None,
+                    upper,
+                    q,
+                    "bar" if handle is not None else "none",
+                    handle,
+                    float(rng.uniform(*gen.DRAWER_DAMPING)),
+                    float(rng.uniform(*gen.DRAWER_FRICTION)),
+                )
+            )
+        return out
+    allowed = h.hinge_prob > 1e-4
+    side_i = int(rng.choice(4, p=_floored(h.hinge_prob, cfg.hinge_floor, allowed)))
+    side = SIDES[side_i]
+    rect = h.door_rect[side_i] + rng.normal(0.0, cfg.rect_noise, 4)
+    if not _ok(rect):
+        return []
+    y0, y1, z0, z1 = rect
+    yc, zc = 0.5 * (y0 + y1), 0.5 * (z0 + z1)
+    origin = {
+        "left": [0.0, y0 + GAP, zc],
+        "right": [0.0, y1 - GAP, zc],
+        "bottom": [0.0, yc, z0 + GAP],
+        "top": [-FRONT, yc, z1 - GAP],
+    }[side]
+    origin = np.asarray(origin) + rng.normal(0.0, cfg.origin_noise, 3)
+    axis = _tilt(SIDE_AXES[side], cfg.axis_noise, rng)
+    q = max(0.0, float(h.door_q[side_i]) + rng.normal(0.0, cfg.q_noise))
+    limits = gen.DOOR_SIDE_LIMIT if side in ("left", "right") else gen.DOOR_FLAP_LIMIT
+    upper = max(float(rng.uniform(*limits)), q + 0.02)
+    handle = _closed_handle(h, "door", axis, origin, q)
+    if handle is not None and side in ("left", "right") and not (y0 <= handle[1] <= y1):
+        handle = None  # the seen handle does not fit this interpretation's panel
+    if side == "bottom" and handle is not None:
+        damping, friction = float(rng.uniform(*gen.DOOR_DAMPING)), float(rng.uniform(1.0, 4.0))
+    else:
+        damping, friction = (
+            float(rng.uniform(*gen.DOOR_DAMPING)),
+            float(rng.uniform(*gen.DOOR_FRICTION)),
+        )
+    return [
+        PartModel(
+            "door",
+            tuple(rect),
+            axis,
+            origin,
+            side,
+            upper,
+            q,
+            "bar" if handle is not None else "none",
+            handle,
+            damping,
+            friction,
+        )
+    ]
+
+
+def _ok(rect) -> bool:
+    return rect[1] - rect[0] > 0.03 and rect[3] - rect[2] > 0.03
+
+
+def _maybe_split(
+    rect: np.ndarray, h: PartHypothesis, cfg: BeliefConfig, rng: np.random.Generator
+) -> list[np.ndarray]:
+    """The split move: one rectangle, or its two halves across its long side."""
+    w, ht = rect[1] - rect[0], rect[3] - rect[2]
+    if max(w, ht) < 2 * cfg.min_cell:
+        return [rect]
+    p = cfg.split_base + cfg.split_merged * h.merged / max(h.views + h.merged, 1)
+    if rng.random() >= min(p, 1.0):
+        return [rect]
+    if ht >= w:
+        mid = 0.5 * (rect[2] + rect[3])
+        return [
+            np.array([rect[0], rect[1], rect[2], mid]),
+            np.array([rect[0], rect[1], mid, rect[3]]),
+        ]
+    mid = 0.5 * (rect[0] + rect[1])
+    return [np.array([rect[0], mid, rect[2], rect[3]]), np.array([mid, rect[1], rect[2], rect[3]])]
+
+
+def _overlaps(a, b) -> bool:
+    iy = min(a[1], b[1]) - max(a[0], b[0])
+    iz = min(a[3], b[3]) - max(a[2], b[2])
+    return iy > 0.02 and iz > 0.02
+
+
+def sample_particles(
+    fused: Sequence[FusedCabinet],
+    rng: np.random.Generator,
+    config: BeliefConfig | None = None,
+    scene: tuple[float, float, float] = (1.0, 0.0, 0.5),
+) -> list[Particle]:
+    """``config.particles`` particles from the fusions of one or more perception runs
+    (module docstring).
+
+    Args:
+        fused: the runs' fusions (the first is the clean run).
+        rng: the only source of randomness (same seed, same particles).
+        config: the noise (default :class:`BeliefConfig`).
+        scene: the cabinet table's ``(cabinet_distance, cabinet_lateral, stand_height)``
+            [m] (:class:`~strug_manip.world.scene.SceneConfig`'s fields), where specs stand.
+
+    Raises:
+        ConfigError: no fusion was given, or a bad config.
+    """
+    cfg = config or BeliefConfig()
+    if not fused:
+        raise ConfigError("sample_particles needs at least one FusedCabinet")
+    out = []
+    for _ in range(cfg.particles):
+        run = int(rng.integers(len(fused)))
+        f = fused[run]
+        front = f.front
+        depth = front.depth if front.depth_seen else float(rng.uniform(*gen.DEPTH_RANGE))
+        depth = max(0.25, depth + rng.normal(0.0, 0.01))
+        parts: list[PartModel] = []
+        source: list[int] = []
+        for i, h in enumerate(f.parts):  # largest first: a smaller one overlapping it is dropped
+            for m in _draw_part(h, depth, cfg, rng):
+                if not any(_overlaps(m.rect, o.rect) for o in parts):
+                    parts.append(m)
+                    source.append(i)
+        # The carcass holds every part (a part may reach past the front seen).
+        box = (0.5 * front.width + 0.1, front.height + 0.1)
+        keep = [
+            i
+            for i, m in enumerate(parts)
+            if max(abs(m.rect[0]), abs(m.rect[1])) <= box[0]
+            and m.rect[2] >= -0.1
+            and m.rect[3] <= box[1]
+        ]
+        parts, source = [parts[i] for i in keep], [source[i] for i in keep]
+        # Never smaller than the generator's smallest cabinet (a failed front measurement).
+        width = max(
+            [front.width, gen.WIDTH_RANGE[0]]
+            + [2 * max(abs(m.rect[0]), abs(m.rect[1])) + 0.04 for m in parts]
+        )
+        height = max([front.height, gen.HEIGHT_RANGE[0]] + [m.rect[3] + 0.02 for m in parts])
+        model = CabinetModel(
+            float(width), float(height), float(depth), tuple(parts), front.T_world_front
+        )
+        spec, q = assemble(model, *scene)
+        order = sorted(range(len(parts)), key=lambda i: (-parts[i].rect[3], parts[i].rect[0]))
+        out.append(Particle(model, spec, q, tuple(source[i] for i in order), run))
+    return out
+
+
+def perceive_cabinet(
+    frames: Sequence[tuple[np.ndarray, np.ndarray, np.ndarray, float]],
+    perceiver: Perceiver,
+    rng: np.random.Generator,
+    config: BeliefConfig | None = None,
+) -> list[FusedCabinet]:
+    """Perception of one cabinet from its views ``(rgb, depth [m], T_world_camera,
+    fovy [rad])``: the clean fusion, then ``config.noisy_runs`` fusions of noisy inputs.
+
+    Raises:
+        perception.errors.BadInputError: a malformed view.
+        perception.errors.NoCabinetError: no view shows a cabinet.
+    """
+    cfg = config or BeliefConfig()
+    views = [check_view(*f) for f in frames]
+    runs = [fuse([perceiver.perceive(v) for v in views])]
+    for _ in range(cfg.noisy_runs):
+        noisy = [noisy_view(v, rng, cfg.depth_noise, cfg.rgb_noise) for v in views]
+        runs.append(fuse([perceiver.perceive(v) for v in noisy]))
+    return runs
+
+
+def initial_belief(
+    frames: Sequence[tuple[np.ndarray, np.ndarray, np.ndarray, float]],
+    perceiver: Perceiver,
+    rng: np.random.Generator,
+    config: BeliefConfig | None = None,
+    scene: tuple[float, float, float] = (1.0, 0.0, 0.5),
+) -> list[Particle]:
+    """Particles of complete cabinets from the robot's views (:func:`perceive_cabinet`
+    then :func:`sample_particles`)."""
+    return sample_particles(perceive_cabinet(frames, perceiver, rng, config), rng, config, scene)

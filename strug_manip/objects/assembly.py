@@ -1,0 +1,378 @@
+"""Complete cabinets from part hypotheses: what makes a belief particle a cabinet the
+world compiles.
+
+A :class:`CabinetModel` is a cabinet as perception describes it: the carcass's outer
+size and, per part, its kind, its closed-state rectangle on the front plane, its joint
+(axis, origin, limits, current position) and its handle, all in the *front frame*
+(``x`` the front's outward normal, ``z`` up, ``y = z x x``, origin on the front plane at
+the front's lateral centre and the carcass's bottom) with the front frame's pose in the
+world. :func:`assemble` turns it into a
+:class:`~strug_manip.objects.generator.CabinetSpec` (carcass boards, drawer boxes,
+door panels, handles, masses, joints, interiors) that
+``ManipulationWorld.from_cabinet_spec`` compiles like a generated one.
+
+Where the spec is placed: the scene stands any cabinet spec with its front plane
+:data:`~strug_manip.world.scene.STAND_SETBACK` behind the cabinet table's edge, facing
+the robot (:func:`scene_object_pose`). Everything perceived in the world frame is
+expressed in that placement's object frame, so a particle's parts are where perception
+saw them; box geoms keep the object frame's axes (a perceived yaw of the front of a
+degree or two tilts joint axes, not boards).
+
+What perception cannot see is set to documented values (the middle of the generator's
+ranges, :mod:`strug_manip.objects.generator`): board thickness :data:`WALL` [m], front
+thickness :data:`FRONT` [m], the gap around fronts :data:`GAP` [m], drawer boxes as
+the generator builds them, bar handles :data:`BAR` (radius, length, standoff) [m], wood
+density :data:`DENSITY` [kg/m^3]; damping and friction are given per part (the belief
+samples them from the generator's ranges).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from planners.errors import ConfigError
+from strug_manip.objects.generator import (
+    METAL_DENSITY,
+    SEMANTICS,
+    CabinetSpec,
+    Geom,
+    PartSpec,
+    _inertial,
+)
+
+#: Carcass board thickness [m] (generator: 0.015-0.020).
+WALL = 0.0175
+#: Back panel thickness [m] (generator: 0.004-0.008).
+BACK = 0.006
+#: Front (drawer front, door, panel) thickness [m] (generator: 0.015-0.022).
+FRONT = 0.018
+#: Gap around a front in its cell [m] (generator: 0.002-0.004).
+GAP = 0.003
+#: Bar handle: radius, length, standoff from the front face [m].
+BAR = (0.0065, 0.12, 0.032)
+#: Wood density [kg/m^3] (generator: 450-700).
+DENSITY = 575.0
+#: Drawer box: height as a share of the front, depth as a share of the free cell depth,
+#: board thickness [m], side clearance [m] (generator: 0.60-0.85, 0.80-0.95, 0.008-0.012,
+#: 0.006).
+DRAWER_BOX = (0.72, 0.875, 0.010, 0.006)
+#: Shelf board thickness [m] (the generator's).
+SHELF_BOARD = 0.008
+KINDS = ("drawer", "door", "panel", "shelf")
+SIDES = ("left", "right", "top", "bottom")
+_BODY_RGBA = (0.76, 0.60, 0.42, 1.0)
+_FRONT_RGBA = (0.87, 0.72, 0.53, 1.0)
+_METAL_RGBA = (0.72, 0.72, 0.75, 1.0)
+
+
+@dataclass(frozen=True)
+class PartModel:
+    """One believed part (front frame, part closed unless ``q``).
+
+    Attributes:
+        kind: ``drawer``, ``door``, ``panel`` or ``shelf``.
+        rect: the cell opening ``(y0, y1, z0, z1)`` on the front plane [m].
+        axis: unit joint axis (3,) (drawer: the opening direction; door: opening is a
+            positive turn about it); ignored for fixed parts.
+        origin: drawer: the cell centre on the front plane; door: a point of the hinge
+            line (3,) [m]; ignored for fixed parts.
+        hinge: door hinge side (:data:`SIDES`), else None.
+        upper: joint limit [m or rad] (lower is 0).
+        q: current joint position [m or rad].
+        handle: ``bar`` or ``none``; handle_pos: the grasp point (3,) [m] with the part
+            closed, or None for the default (the generator's spot).
+        damping: [N s/m] or [N m s/rad]; friction: [N] or [N m].
+    """
+
+    kind: str
+    rect: tuple[float, float, float, float]
+    axis: np.ndarray
+    origin: np.ndarray
+    hinge: str | None = None
+    upper: float = 0.0
+    q: float = 0.0
+    handle: str = "none"
+    handle_pos: np.ndarray | None = None
+    damping: float = 0.0
+    friction: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.kind not in KINDS:
+            raise ConfigError(f"PartModel.kind must be one of {KINDS}, got {self.kind!r}")
+        y0, y1, z0, z1 = (float(v) for v in self.rect)
+        if not (y1 - y0 > 2 * GAP + 0.01 and z1 - z0 > 2 * GAP + 0.01):
+            raise ConfigError(f"PartModel.rect must span at least 1 cm each way, got {self.rect}")
+        if self.kind == "door" and self.hinge not in SIDES:
+            raise ConfigError(f"a door needs hinge in {SIDES}, got {self.hinge!r}")
+        if self.kind in ("drawer", "door") and not self.upper > 0:
+            raise ConfigError(f"a movable part needs upper > 0, got {self.upper!r}")
+
+
+@dataclass(frozen=True)
+class CabinetModel:
+    """A whole believed cabinet (front frame; see the module docstring).
+
+    Attributes:
+        width, height: the front's extents [m]; depth: the carcass depth [m].
+        parts: the parts, any order.
+        T_world_front: (4, 4) the front frame in the world.
+    """
+
+    width: float
+    height: float
+    depth: float
+    parts: tuple[PartModel, ...]
+    T_world_front: np.ndarray
+
+    def __post_init__(self) -> None:
+        for name in ("width", "height", "depth"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and 0.1 <= v <= 3.0):
+                raise ConfigError(f"CabinetModel.{name} must be in [0.1, 3] m, got {v!r}")
+
+
+def scene_object_pose(
+    depth: float, cabinet_distance: float, lateral: float, stand: float
+) -> np.ndarray:
+    """Where the scene puts the object frame of a cabinet spec ``depth`` deep (the
+    cabinet table's placement in :func:`strug_manip.world.scene.build_scene`), (4, 4)."""
+    from strug_manip.world.scene import STAND_SETBACK
+
+    if not stand > 0:
+        raise ConfigError("assembled cabinets stand on the cabinet table (stand_height > 0)")
+    T = np.diag([-1.0, -1.0, 1.0, 1.0])  # yaw pi: the front faces the robot
+    T[:3, 3] = [cabinet_distance + STAND_SETBACK + depth / 2, lateral, stand]
+    return T
+
+
+def _box(name: str, lo, hi, rgba, material: str = "wood") -> Geom:
+    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+    return Geom(name, "box", tuple(0.5 * (lo + hi)), tuple(hi - lo), material=material, rgba=rgba)
+
+
+def _carcass(m: CabinetModel, cells: list[tuple[float, float, float, float]]) -> list[Geom]:
+    """Carcass boards in the front frame: sides, top, bottom, back, and boards framing
+    every cell."""
+    w, h, D, t = m.width, m.height, m.depth, WALL
+    geoms = [
+        _box("side_left", (-D, -w / 2, 0), (0, -w / 2 + t, h), _BODY_RGBA),
+        _box("side_right", (-D, w / 2 - t, 0), (0, w / 2, h), _BODY_RGBA),
+        _box("top", (-D, -w / 2 + t, h - t), (0, w / 2 - t, h), _BODY_RGBA),
+        _box("bottom", (-D, -w / 2 + t, 0), (0, w / 2 - t, t), _BODY_RGBA),
+        _box("back", (-D, -w / 2 + t, t), (-D + BACK, w / 2 - t, h - t), _BODY_RGBA),
+    ]
+    lo_y, hi_y, lo_z, hi_z = -w / 2 + t, w / 2 - t, t, h - t
+    for i, (y0, y1, z0, z1) in enumerate(cells):
+        ya, yb = max(y0 - t, lo_y), min(y1 + t, hi_y)
+        for k, (za, zb) in enumerate(((z0 - t, z0), (z1, z1 + t))):
+            za, zb = max(za, lo_z - t), min(zb, hi_z + t)
+            if zb - za > 1e-3 and yb - ya > 1e-3:
+                geoms.append(
+                    _box(f"frame_{i}_{'bt'[k]}", (-D + BACK, ya, za), (0, yb, zb), _BODY_RGBA)
+                )
+        for k, (ya2, yb2) in enumerate(((y0 - t, y0), (y1, y1 + t))):
+            ya2, yb2 = max(ya2, lo_y - t), min(yb2, hi_y + t)
+            if yb2 - ya2 > 1e-3 and z1 - z0 > 1e-3:
+                geoms.append(
+                    _box(f"frame_{i}_{'lr'[k]}", (-D + BACK, ya2, z0), (0, yb2, z1), _BODY_RGBA)
+                )
+    return geoms
+
+
+def _bar(centre: np.ndarray, along: str) -> list[Geom]:
+    """A bar handle whose grasp point (bar centre) is ``centre`` (link frame)."""
+    r, length, s = BAR
+    geoms = [
+        Geom("handle_bar", "cylinder", tuple(centre), (r, length), along, "metal", _METAL_RGBA)
+    ]
+    k = "xyz".index(along)
+    for i, sign in enumerate((-1.0, 1.0)):
+        p = centre - np.array([0.5 * s, 0.0, 0.0])
+        p[k] += sign * (0.5 * length - 0.01)
+        geoms.append(
+            Geom(f"handle_post_{i}", "cylinder", tuple(p), (0.8 * r, s), "x", "metal", _METAL_RGBA)
+        )
+    return geoms
+
+
+def _part_geoms(
+    p: PartModel, depth: float
+) -> tuple[list[Geom], np.ndarray, np.ndarray, np.ndarray | None, tuple]:
+    """Geometry in the part's link frame, the link origin (front frame), the grasp
+    point (front frame), the bar direction, and the interior (centre, size) in the front
+    frame."""
+    y0, y1, z0, z1 = p.rect
+    yc, zc = 0.5 * (y0 + y1), 0.5 * (z0 + z1)
+    fw, fh = y1 - y0 - 2 * GAP, z1 - z0 - 2 * GAP
+    centre = np.array([0.0, yc, zc])
+    if p.kind in ("panel", "shelf"):
+        if p.kind == "panel":
+            return (
+                [_box("panel", (-FRONT, -fw / 2, -fh / 2), (0, fw / 2, fh / 2), _FRONT_RGBA)],
+                centre,
+                None,
+                None,
+                (None, None),
+            )
+        origin = np.array([0.0, yc, z0])
+        board = _box(
+            "board", (-depth + BACK + 0.001, -fw / 2, 0), (0, fw / 2, SHELF_BOARD), _BODY_RGBA
+        )
+        inner = np.array([depth, y1 - y0, z1 - z0 - SHELF_BOARD])
+        return (
+            [board],
+            origin,
+            None,
+            None,
+            (np.array([-depth / 2, yc, 0.5 * (z0 + SHELF_BOARD + z1)]), inner),
+        )
+    if p.kind == "drawer":
+        hf, df, tb, clr = DRAWER_BOX
+        bw, bh = y1 - y0 - 2 * clr, hf * fh
+        bd = df * (depth - FRONT - 0.01)
+        zb = -0.5 * (z1 - z0) + 0.005
+        xr = -FRONT - bd
+        geoms = [
+            _box("front", (-FRONT, -fw / 2, -fh / 2), (0, fw / 2, fh / 2), _FRONT_RGBA),
+            _box("bottom", (xr, -bw / 2, zb), (-FRONT, bw / 2, zb + tb), _FRONT_RGBA),
+            _box("side_left", (xr, -bw / 2, zb + tb), (-FRONT, -bw / 2 + tb, zb + bh), _FRONT_RGBA),
+            _box("side_right", (xr, bw / 2 - tb, zb + tb), (-FRONT, bw / 2, zb + bh), _FRONT_RGBA),
+            _box("back", (xr, -bw / 2 + tb, zb + tb), (xr + tb, bw / 2 - tb, zb + bh), _FRONT_RGBA),
+        ]
+        grasp = (
+            centre + np.array([BAR[2], 0.0, 0.0])
+            if p.handle_pos is None
+            else np.asarray(p.handle_pos, float)
+        )
+        if p.handle == "bar":
+            geoms += _bar(grasp - centre, "y")
+        inner = np.array([bd - tb, bw - 2 * tb, bh - tb])
+        ic = centre + np.array([xr + tb + 0.5 * inner[0], 0.0, zb + tb + 0.5 * inner[2]])
+        return geoms, centre, grasp, np.array([0.0, 1.0, 0.0]), (ic, inner)
+    # A door: link frame on the hinge line, at the edge's middle.
+    origin = np.asarray(p.origin, dtype=float)
+    lo = np.array([-FRONT, y0 + GAP, z0 + GAP]) - origin
+    hi = np.array([0.0, y1 - GAP, z1 - GAP]) - origin
+    geoms = [_box("panel", lo, hi, _FRONT_RGBA)]
+    side = p.hinge in ("left", "right")
+    e = {"left": (0, 1, 0), "right": (0, -1, 0), "top": (0, 0, -1), "bottom": (0, 0, 1)}[p.hinge]
+    span = fw if side else fh
+    if p.handle_pos is None:
+        free = centre + np.asarray(e, float) * (0.5 * span - 0.045)
+        grasp = free + np.array([BAR[2] if p.handle == "bar" else 0.0, 0.0, 0.0])
+    else:
+        grasp = np.asarray(p.handle_pos, dtype=float)
+    along = "z" if side else "y"
+    if p.handle == "bar":
+        geoms += _bar(grasp - origin, along)
+    inner = np.array([depth - FRONT, y1 - y0, z1 - z0])
+    ic = np.array([-0.5 * (depth + FRONT), yc, zc])
+    return geoms, origin, grasp, np.array([0.0, 0.0, 1.0] if side else [0.0, 1.0, 0.0]), (ic, inner)
+
+
+def assemble(
+    model: CabinetModel,
+    cabinet_distance: float = 1.0,
+    lateral: float = 0.0,
+    stand: float = 0.5,
+) -> tuple[CabinetSpec, dict[str, float]]:
+    """The :class:`CabinetSpec` of ``model``, placed as the scene places a spec (the
+    defaults are :class:`~strug_manip.world.scene.SceneConfig`'s), and the parts'
+    current joint positions ``{joint name: q}`` (``ManipulationWorld.reset`` takes them).
+
+    Raises:
+        ConfigError: a malformed model.
+    """
+    if not isinstance(model, CabinetModel):
+        raise ConfigError(f"model must be a CabinetModel, got {model!r}")
+    T_wo = scene_object_pose(model.depth, cabinet_distance, lateral, stand)
+    A = np.linalg.inv(T_wo) @ np.asarray(model.T_world_front, dtype=float)
+    R, b = A[:3, :3], A[:3, 3]
+
+    def point(p: np.ndarray) -> np.ndarray:
+        return R @ np.asarray(p, float) + b
+
+    def moved(g: Geom, shift: np.ndarray) -> Geom:
+        return Geom(
+            g.name,
+            g.shape,
+            tuple(float(v) for v in np.asarray(g.pos) + shift),
+            g.size,
+            g.axis,
+            g.material,
+            g.rgba,
+        )
+
+    body = [
+        moved(g, point(np.zeros(3)) + R @ np.asarray(g.pos) - np.asarray(g.pos))
+        for g in _carcass(model, [p.rect for p in model.parts])
+    ]
+    densities = {"wood": DENSITY, "metal": METAL_DENSITY}
+    order = sorted(
+        range(len(model.parts)), key=lambda i: (-model.parts[i].rect[3], model.parts[i].rect[0])
+    )
+    parts, q = [], {}
+    for n, i in enumerate(order, start=1):
+        p = model.parts[i]
+        geoms, origin, grasp, bar_dir, (ic, isize) = _part_geoms(p, model.depth)
+        origin_o = point(origin)
+        geoms_o = [moved(g, R @ np.asarray(g.pos) - np.asarray(g.pos)) for g in geoms]
+        movable = p.kind in ("drawer", "door")
+        y0, y1, z0, z1 = p.rect
+        spec = PartSpec(
+            link=f"link_{n}",
+            joint=f"joint_{n}",
+            kind=p.kind,
+            semantic=SEMANTICS[p.kind][1],
+            row=0,
+            col=n - 1,
+            cell_center=point([0.0, 0.5 * (y0 + y1), 0.5 * (z0 + z1)]),
+            cell_size=np.array([y1 - y0, z1 - z0]),
+            joint_type={"drawer": "prismatic", "door": "revolute"}.get(p.kind, "fixed"),
+            axis=R @ (np.asarray(p.axis, float) / np.linalg.norm(p.axis))
+            if movable
+            else np.zeros(3),
+            origin=origin_o,
+            lower=0.0,
+            upper=float(p.upper) if movable else 0.0,
+            damping=float(p.damping) if movable else 0.0,
+            friction=float(p.friction) if movable else 0.0,
+            hinge=p.hinge if p.kind == "door" else None,
+            handle=p.handle if movable else "none",
+            handle_pos=point(grasp) if grasp is not None else None,
+            handle_axis=(R @ bar_dir if p.handle == "bar" else R @ np.array([1.0, 0, 0]))
+            if movable
+            else None,
+            interior_center=point(ic) if ic is not None else None,
+            interior_size=isize,
+            geoms=tuple(geoms_o),
+            inertial=_inertial(geoms_o, densities),
+        )
+        parts.append(spec)
+        if movable:
+            q[spec.joint] = float(np.clip(p.q, 0.0, p.upper))
+    kinds = tuple(
+        k for k in ("drawer", "door", "shelf", "panel") if any(p.kind == k for p in model.parts)
+    ) or ("panel",)
+    spec = CabinetSpec(
+        seed=0,
+        kinds=kinds,
+        width=float(model.width),
+        depth=float(model.depth),
+        height=float(model.height),
+        wall=WALL,
+        back=BACK,
+        plinth=0.0,
+        rows=1,
+        cols=max(len(parts), 1),
+        row_heights=np.array([model.height]),
+        col_widths=np.array([model.width]),
+        body_geoms=tuple(body),
+        body_inertial=_inertial(body, densities),
+        parts=tuple(parts),
+        colors={"body": _BODY_RGBA, "front": _FRONT_RGBA, "handle": _METAL_RGBA},
+    )
+    return spec, q
