@@ -88,7 +88,7 @@ def test_the_checker_sees_the_state_it_was_loaded_with(world, ik) -> None:
 
 def test_an_attached_object_follows_the_gripper_and_its_contacts_count(checker, ik) -> None:
     T_go = np.eye(4)
-    T_go[0, 3] = 0.35  # the object held 0.35 m ahead of the TCP: into the drawer's front
+    T_go[0, 3] = 0.3  # the object held 0.3 m ahead of the TCP: in the drawer's front board
     hand = arm_at(ik, (0.75, 0.0, 1.06))
     assert checker.free(hand)
     checker.attach("object", T_go)

@@ -14,7 +14,13 @@ import pytest
 
 from planners.errors import ConfigError, UnknownNameError
 from strug_manip.control import flip_fingers, handle_grasps, held_grasp, place_target
-from strug_manip.control.grasps import PITCHES
+from strug_manip.control.grasps import (
+    FACE_CLEARANCE,
+    MIN_OVERLAP,
+    PAD_CORNERS,
+    PITCHES,
+    front_of_handle,
+)
 from strug_manip.domains.manipulation.rules import DRAG_LIMIT, dragged, inside, open_enough
 from strug_manip.objects.generator import axis_angle, generate_cabinet
 from strug_manip.objects.hypotheses import check_pose
@@ -36,16 +42,27 @@ def check_grasps(part, gs, q: float = 0.0, T: np.ndarray | None = None) -> None:
     T = np.eye(4) if T is None else T
     R_part = axis_angle(part.axis, q) if part.joint_type == "revolute" else np.eye(3)
     normal = T[:3, :3] @ R_part @ FRONT
-    assert len(gs) % (1 + len(PITCHES)) == 0 and gs
-    for k, g in enumerate(gs):
+    assert gs
+    for g in gs:
         check_pose("grasp", g)
-        np.testing.assert_allclose(g[:3, 3], part.handle_at(q, T), atol=1e-12)
-        pitch = (0.0, *PITCHES)[k % (1 + len(PITCHES))]
-        # The approach (x) into the front, pitched down by ``pitch`` about the front's
+        # The TCP on the handle's grasp point, or backed off it along the front's normal
+        # (never more than keeps the handle inside the pads).
+        off = g[:3, 3] - part.handle_at(q, T)
+        np.testing.assert_allclose(off, (off @ normal) * normal, atol=1e-12)
+        assert -1e-12 <= off @ normal <= PAD_CORNERS[0, 0] - MIN_OVERLAP + 1e-12
+        # The approach (x) into the front, pitched by one of the pitches about the front's
         # horizontal axis; the fingers (y) pointing up, or level toward +y.
-        assert g[:3, 0] @ -normal == pytest.approx(np.cos(pitch), abs=1e-9)
-        assert g[2, 0] == pytest.approx(-np.sin(pitch) * np.hypot(*normal[:2]), abs=1e-9)
+        pitch = float(np.arccos(np.clip(g[:3, 0] @ -normal, -1.0, 1.0)))
+        assert min(abs(pitch - abs(p)) for p in (0.0, *PITCHES)) < 1e-9
+        assert abs(g[2, 0]) == pytest.approx(np.sin(pitch) * np.hypot(*normal[:2]), abs=1e-9)
         assert g[2, 1] > -1e-9
+
+
+def pads_clear_the_front(part, g: np.ndarray) -> bool:
+    """Every corner of the open finger pads stays in front of the part's front face (the
+    closed part, object frame) by at least the grasp's clearance."""
+    corners = g[:3, 3] + PAD_CORNERS @ g[:3, :3].T
+    return bool(np.all(corners[:, 0] >= front_of_handle(part) + FACE_CLEARANCE - 1e-9))
 
 
 def test_bar_grasps_straddle_the_bar(cabinets) -> None:
@@ -54,9 +71,12 @@ def test_bar_grasps_straddle_the_bar(cabinets) -> None:
         assert part.handle == "bar"
         gs = handle_grasps(part)
         check_grasps(part, gs)
-        assert len(gs) == 1 + len(PITCHES)
+        # The level grasp always; a pitched one where the open pads clear the front.
+        assert 1 <= len(gs) <= 1 + len(PITCHES)
+        assert abs(gs[0][2, 0]) < 1e-9  # level first
         for g in gs:
             assert abs(g[:3, 1] @ part.handle_axis) < 1e-9  # fingers across the bar
+            assert pads_clear_the_front(part, g)
     # A horizontal drawer bar: the fingers open vertically; the door's vertical bar:
     # horizontally.
     assert abs(handle_grasps(cabinets["drawers_11"].part("link_1"))[0][2, 1]) == pytest.approx(1)
@@ -78,11 +98,11 @@ def test_knob_grasps_offer_both_finger_directions(cabinets) -> None:
     assert part.handle == "knob" and part.hinge == "right"
     gs = handle_grasps(part)
     check_grasps(part, gs)
-    assert len(gs) == 2 * (1 + len(PITCHES))
+    assert all(pads_clear_the_front(part, g) for g in gs)
     # First along the line from the hinge to the free edge (vertical fingers on a side
     # door), then the other way.
     assert abs(gs[0][2, 1]) == pytest.approx(1.0)
-    assert abs(gs[1 + len(PITCHES)][2, 1]) < 1e-9
+    assert any(abs(g[2, 1]) < 1e-9 for g in gs[1:])
 
 
 def test_a_flat_front_has_no_grasp_and_flips_keep_the_grasp(cabinets) -> None:

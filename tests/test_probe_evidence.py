@@ -9,7 +9,7 @@ turns them about one edge of its cell (left, right, top or bottom; by -0.4..0.4 
 A hypothesis explains the after-cloud when the moved points lie on it: its score is a
 quantile of their distances to the nearest after-point (a *quantile Hausdorff*
 distance: robust to the pixels the motion revealed or hid). The kind whose best
-hypothesis scores lowest is the answer; it must be the true one, by a margin.
+hypothesis scores lowest is the answer; it must be the true one, by :data:`MARGIN`.
 """
 
 from __future__ import annotations
@@ -28,6 +28,10 @@ from strug_manip.world.views import aim_head
 CHANGED = 0.01
 #: Quantile of the nearest-neighbour distances that scores a hypothesis.
 QUANTILE = 0.8
+#: The true kind's best hypothesis must explain the after-cloud this much better [m]
+#: (the right model itself scores about a centimetre: pixels the motion revealed or hid,
+#: the inside of a pulled drawer).
+MARGIN = 0.004
 #: At most this many moved points are scored (subsampled evenly).
 MAX_POINTS = 400
 
@@ -39,6 +43,20 @@ def _nearest(a: np.ndarray, b: np.ndarray) -> np.ndarray:
         d = np.linalg.norm(a[i : i + 100, None, :] - b[None, :, :], axis=2)
         out[i : i + 100] = d.min(axis=1)
     return out
+
+
+def _best(score, lo: float, hi: float, n: int = 11, rounds: int = 3) -> float:
+    """The least ``score(x)`` over ``x`` in [lo, hi]: a grid of ``n``, refined ``rounds``
+    times around its best point."""
+    best = np.inf
+    for _ in range(rounds):
+        xs = np.linspace(lo, hi, n)
+        vals = [score(x) for x in xs]
+        k = int(np.argmin(vals))
+        best = min(best, vals[k])
+        step = xs[1] - xs[0]
+        lo, hi = xs[k] - step, xs[k] + step
+    return float(best)
 
 
 def _score(moved: np.ndarray, after: np.ndarray) -> float:
@@ -61,7 +79,7 @@ def probe_evidence(frames, part, T_world_cabinet) -> dict[str, float]:
     Q = Q[np.linspace(0, len(Q) - 1, min(4 * MAX_POINTS, len(Q))).astype(int)]
     R, t = T_world_cabinet[:3, :3], T_world_cabinet[:3, 3]
     normal = R @ np.array([1.0, 0.0, 0.0])
-    drawer = min(_score(P + s * normal, Q) for s in np.linspace(0.0, 0.10, 11))
+    drawer = _best(lambda s: _score(P + s * normal, Q), 0.0, 0.10)
     c, (w, h) = part.cell_center, part.cell_size
     up, side = np.array([0.0, 0.0, 1.0]), np.array([0.0, 1.0, 0.0])
     edges = [  # (a point on the hinge line, its axis), cabinet frame
@@ -73,9 +91,8 @@ def probe_evidence(frames, part, T_world_cabinet) -> dict[str, float]:
     door = np.inf
     for o, a in edges:
         ow, aw = R @ o + t, R @ a
-        for th in np.linspace(-0.4, 0.4, 17):
-            Rh = axis_angle(aw, th)
-            door = min(door, _score((P - ow) @ Rh.T + ow, Q))
+        door = min(door, _best(lambda th, ow=ow, aw=aw: _score(
+            (P - ow) @ axis_angle(aw, th).T + ow, Q), -0.4, 0.4))  # fmt: skip
     return {"drawer": drawer, "door": door}
 
 
@@ -116,5 +133,5 @@ def test_point_cloud_after_pull_h_tells_drawer_from_door(ctx, seed: int, kind: s
     after = world.render()
     scores = probe_evidence((before, after), part, T)
     truth, other = ("drawer", "door") if kind == "drawer" else ("door", "drawer")
-    assert scores[truth] < 0.6 * scores[other], scores
+    assert scores[truth] + MARGIN < scores[other], scores
     world.close()

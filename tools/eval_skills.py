@@ -4,6 +4,7 @@ chains and the planning twin.
 Usage::
 
     python tools/eval_skills.py --seeds 1000:1030 [--json] [--out DIR] [--workers 2]
+                                [--plot docs/drag.png]
 
 For every generator seed in ``A..B-1`` two scenes are built (a drawers-only and a
 doors-only cabinet, as the OpenDrawer and OpenDoor tasks draw them), and for every
@@ -351,7 +352,8 @@ def summary(records: list[dict]) -> dict:
       speed-up is the full robot's total wall time over the twin's with its placement
       cached (a search simulates a skill on a particle many times; ``speedup_cold``:
       over the first runs, which search the placement);
-    - ``seconds``: median wall time per skill run [s] and the total.
+    - ``seconds``: median wall time of the openings, per skill (``median_per_skill_s``)
+      and the total [s].
     """
     parts = [p for r in records for p in r["parts"]]
     out: dict = {}
@@ -418,8 +420,18 @@ def summary(records: list[dict]) -> dict:
         "disagreements": dict(Counter(f"{t['full']} vs {t['twin']}" for t in tw if not t["agree"])),
     }
     walls = [p["open"]["wall"] for p in parts]
+    per: dict[str, list[float]] = {}
+    for p in parts:
+        opening = "OpenDrawer" if p["category"] == "open_drawer" else "OpenDoor"
+        per.setdefault(opening, []).append(p["open"]["wall"])
+        for t in p["twin"][1:-1]:  # the wrong-model openings
+            per.setdefault("opening, wrong model", []).append(t["full_wall"])
+        per.setdefault("PullH", []).append(p["twin"][-1]["full_wall"])
+        if p.get("chain", {}).get("wall") is not None:
+            per.setdefault("Pick + Place", []).append(p["chain"]["wall"] - p["open"]["wall"])
     out["seconds"] = {
         "median_skill_s": statistics.median(walls) if walls else None,
+        "median_per_skill_s": {k: statistics.median(v) for k, v in per.items()},
         "total_s": sum(r["seconds"] for r in records),
     }
     return out
@@ -444,6 +456,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--json", action="store_true", help="print one JSON object")
     ap.add_argument("--out", type=Path, default=None, help="results folder (resumable)")
     ap.add_argument("--workers", type=int, default=1, help="processes (default 1)")
+    ap.add_argument("--plot", type=Path, default=None, help="write the drag distributions (PNG)")
     args = ap.parse_args(argv)
     try:
         a, b = (int(v) for v in args.seeds.split(":"))
@@ -459,31 +472,99 @@ def main(argv: list[str] | None = None) -> int:
     path = out_dir / "results.jsonl"
     done = load(path)
     todo = [s for s in range(a, b) if s not in done]
+    from tqdm import tqdm
+
+    bar = tqdm(total=len(todo), unit="cabinet", desc="eval_skills", file=sys.stderr)
     with path.open("a") as f:
+
+        def keep(rec: dict) -> None:
+            f.write(json.dumps(rec) + "\n")
+            f.flush()
+            os.fsync(f.fileno())
+            done[rec["seed"]] = rec
+            bar.update(1)
+
         if args.workers > 1 and len(todo) > 1:
             with mp.get_context("spawn").Pool(args.workers) as pool:
                 for rec in pool.imap_unordered(evaluate_seed, todo):
-                    f.write(json.dumps(rec) + "\n")
-                    f.flush()
-                    os.fsync(f.fileno())
-                    done[rec["seed"]] = rec
-                    print(f"seed {rec['seed']} done", file=sys.stderr)
+                    keep(rec)
         else:
             for seed in todo:
-                rec = evaluate_seed(seed)
-                f.write(json.dumps(rec) + "\n")
-                f.flush()
-                os.fsync(f.fileno())
-                done[seed] = rec
-                print(f"seed {seed} done", file=sys.stderr)
+                keep(evaluate_seed(seed))
+    bar.close()
     records = [done[s] for s in range(a, b) if s in done]
     figures = summary(records)
     (out_dir / "summary.json").write_text(json.dumps(figures, indent=1) + "\n")
+    if args.plot is not None:
+        plot_drag(records, args.plot, f"{a}:{b}")
     if args.json:
         print(json.dumps(figures))
     else:
-        print(json.dumps(figures, indent=1))
+        print(report(figures, f"{a}:{b}"))
     return 0
+
+
+def plot_drag(records: list[dict], path: Path, seeds: str) -> None:
+    """Histograms of the cabinet's displacement after single wrong-model pulls and after
+    sequences of four, with the paper's 0.1 m limit marked."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    parts = [p for r in records for p in r["parts"]]
+    single = [w["displacement"] for p in parts for w in p["wrong"]]
+    four = [p["sequence"][-1] for p in parts if p.get("sequence")]
+    fig, axes = plt.subplots(1, 2, figsize=(10, 3.6), sharey=False)
+    bins = np.linspace(0.0, max(0.3, max(single + four, default=0.3)), 31)
+    for ax, data, title in (
+        (axes[0], single, f"one wrong pull ({len(single)} pulls)"),
+        (axes[1], four, f"four wrong pulls in a row ({len(four)} sequences)"),
+    ):
+        ax.hist(data, bins=bins, color="#4477aa")
+        ax.axvline(0.1, color="#cc3311", ls="--", label="0.1 m: the episode fails (-10)")
+        over = sum(d > 0.1 for d in data)
+        ax.set_title(f"{title}: {over} past 0.1 m")
+        ax.set_xlabel("cabinet base displacement from its start [m]")
+        ax.set_ylabel("count")
+        ax.legend(loc="upper right", fontsize=8)
+    fig.suptitle(f"Wrong-model pulls drag the cabinet (generated cabinets {seeds})", fontsize=10)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def report(fig: dict, seeds: str) -> str:
+    """The figures as lines a person reads (the ``--json`` object has them all)."""
+    pct = lambda r: f"{r['ok']}/{r['n']} ({100 * r['ok'] / max(r['n'], 1):.0f}%)"  # noqa: E731
+    lines = [f"eval_skills on generated cabinets {seeds}"]
+    for cat in ("open_drawer", "open_door", "open_flap"):
+        r = fig[cat]
+        causes = ", ".join(f"{k} {v}" for k, v in sorted(r["causes"].items()) if k != "ok")
+        lines.append(f"  {cat:12s} {pct(r):14s} failures: {causes or '-'}; no room for the "
+                     f"object: {r['no_room']}; median {r['median_wall_s'] or 0:.2f} s")  # fmt: skip
+    w = fig["wrong_model"]
+    d = w["displacement_m"]
+    lines.append(f"  wrong model  {w['dragged']['ok']}/{w['dragged']['n']} single pulls "
+                 f"dragged the cabinet past 0.1 m; {w['dragged_after_4']}/{w['sequences']} "
+                 f"sequences of four; false successes {w['false_success']}")  # fmt: skip
+    lines.append(f"               displacement per pull p50 {d['p50']:.3f} p90 {d['p90']:.3f} "
+                 f"max {d['max']:.3f} m; statuses {w['statuses']}")  # fmt: skip
+    for kind, probes in fig["probes"].items():
+        cells = ", ".join(f"{k} {v['moved']}/{v['n']} (median {v['median_motion'] or 0:.3f})"
+                          for k, v in probes.items())  # fmt: skip
+        lines.append(f"  probes {kind:9s} moved: {cells}")
+    lines.append(f"  chains       drawer {pct(fig['chain_drawer'])}, door {pct(fig['chain_door'])}")
+    t = fig["twin"]
+    lines.append(f"  twin         agreement {pct(t['agreement'])} (strict "
+                 f"{pct(t['agreement_strict'])}), speed-up {t['speedup'] or 0:.1f}x "
+                 f"(cold {t['speedup_cold'] or 0:.1f}x)")  # fmt: skip
+    lines.append(f"               disagreements (full vs twin) {t['disagreements']}")
+    per = ", ".join(f"{k} {v:.2f}" for k, v in fig["seconds"]["median_per_skill_s"].items())
+    lines.append(f"  seconds      median wall per full-robot run [s]: {per}; "
+                 f"total {fig['seconds']['total_s']:.0f} s")  # fmt: skip
+    return "\n".join(lines)
 
 
 if __name__ == "__main__":

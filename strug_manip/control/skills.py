@@ -280,9 +280,13 @@ class _Opening(Skill):
             if flap and part.handle == "bar":
                 move = _rolling(self.joint, params.flap_wrist_share)
         poses = along(move, g, amount, max(radius, 1e-3), params.line_step)
-        q0 = part_at(world, g)[2]
+        _, world_joint, q0 = part_at(world, g)
         n = len(poses[0])
         part_q = q0 + amount * np.arange(1, n + 1) / n
+        if world.part_units()[world_joint] != ("m" if prismatic else "rad"):
+            # The world holds the part on another kind of joint (a twin of the true
+            # cabinet simulating a wrong belief): its checks cannot move it along.
+            part_q = None
         return _grasp_and_move(
             self.name, world, g, poses, params.open_speed, "move", part_q, params
         )

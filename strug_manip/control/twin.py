@@ -123,8 +123,6 @@ class PlanningTwin:
             base, cabinet_spec=spec, cabinet_folder=None, robot="gripper", timestep=TIMESTEP
         )
         self.world = ManipulationWorld(cfg)
-        # Bodies at rest (the cabinet and object while the hand is elsewhere) sleep.
-        self.world.model.opt.enableflags |= int(mujoco.mjtEnableBit.mjENBL_SLEEP)
         self._robot_config = dataclasses.replace(
             base, cabinet_spec=spec, cabinet_folder=None, robot="fetch"
         )
