@@ -39,10 +39,12 @@ class SkillParams:
         settle_time: hold after a motion before the next phase [s].
         drawer_travel: how far OpenDrawer pulls by default [m] (capped before the
             believed limit): far enough to lower the 0.10 x 0.06 m object into it.
-        door_angle: how far OpenDoor opens a side-hinged door by default [rad]: 80
-            degrees leaves the cell open for an object carried in from the front.
-        flap_angle: how far OpenDoor lifts a top-hinged flap by default [rad] (their
-            limits are 1.20-1.57 rad): high enough to carry the object in under it.
+        door_angle: how far OpenDoor opens a side-hinged door by default [rad] (capped
+            before the believed limit, 1.6-2.1 rad): 100 degrees, so that even a door
+            of a narrow cell leaves its opening free for the object and the fingers.
+        flap_angle: how far OpenDoor lifts a top-hinged flap by default [rad]: as far
+            as it goes (capped before its limit, 1.20-1.57 rad): the object is carried
+            in under it.
         drop_angle: how far OpenDoor lowers a bottom-hinged (drop-down) flap by default
             [rad]: as far as it goes (capped before the limit): the object is carried
             in over the open flap's edge, which a low cell leaves little room for.
@@ -92,8 +94,8 @@ class SkillParams:
     grip_time: float = 0.25
     settle_time: float = 0.15
     drawer_travel: float = 0.25
-    door_angle: float = 1.40
-    flap_angle: float = 1.30
+    door_angle: float = 1.75
+    flap_angle: float = 1.57
     drop_angle: float = 1.57
     flap_wrist_share: float = 0.5
     limit_margin_m: float = 0.02
