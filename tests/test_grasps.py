@@ -16,10 +16,12 @@ from planners.errors import ConfigError, UnknownNameError
 from strug_manip.control import flip_fingers, handle_grasps, held_grasp, place_target
 from strug_manip.control.grasps import (
     FACE_CLEARANCE,
-    MIN_OVERLAP,
+    MIN_KNOB_GRIP,
     PAD_CORNERS,
     PITCHES,
     front_of_handle,
+    knob_end,
+    max_back_off,
 )
 from strug_manip.domains.manipulation.rules import DRAG_LIMIT, dragged, inside, open_enough
 from strug_manip.objects.generator import axis_angle, generate_cabinet
@@ -49,7 +51,7 @@ def check_grasps(part, gs, q: float = 0.0, T: np.ndarray | None = None) -> None:
         # (never more than keeps the handle inside the pads).
         off = g[:3, 3] - part.handle_at(q, T)
         np.testing.assert_allclose(off, (off @ normal) * normal, atol=1e-12)
-        assert -1e-12 <= off @ normal <= PAD_CORNERS[0, 0] - MIN_OVERLAP + 1e-12
+        assert -1e-12 <= off @ normal <= max_back_off(part) + 1e-12
         # The approach (x) into the front, pitched by one of the pitches about the front's
         # horizontal axis; the fingers (y) pointing up, or level toward +y.
         pitch = float(np.arccos(np.clip(g[:3, 0] @ -normal, -1.0, 1.0)))
@@ -103,6 +105,23 @@ def test_knob_grasps_offer_both_finger_directions(cabinets) -> None:
     # door), then the other way.
     assert abs(gs[0][2, 1]) == pytest.approx(1.0)
     assert any(abs(g[2, 1]) < 1e-9 for g in gs[1:])
+
+
+def test_every_handle_the_generator_makes_can_be_grasped() -> None:
+    # Short knobs (0.02 m) once had no grasp: the pads reached the front before the
+    # TCP reached the grasp point, and backing off left the grasp point outside them.
+    for seed in range(120):
+        for kind in ("drawer", "door"):
+            for part in generate_cabinet(seed, kinds=(kind,)).movable_parts:
+                if part.handle == "none":
+                    continue
+                gs = handle_grasps(part)
+                assert gs, f"seed {seed} {kind} {part.link}: no grasp of its {part.handle}"
+                if part.handle == "knob":
+                    # The level grasp keeps MIN_KNOB_GRIP of the knob between the tips
+                    # (PAD_CORNERS[0, 0] in front of the TCP) and the knob's end.
+                    tips = gs[0][0, 3] + PAD_CORNERS[0, 0] * gs[0][0, 0]
+                    assert knob_end(part) - tips >= MIN_KNOB_GRIP - 1e-12
 
 
 def test_a_flat_front_has_no_grasp_and_flips_keep_the_grasp(cabinets) -> None:

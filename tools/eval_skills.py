@@ -120,6 +120,8 @@ def run_opening(world, spec, link, joint, ctx, plan_world=None):
         out = skill.run(world, ctx=ctx, plan_world=plan_world)
         if out.status != "ik_infeasible":
             break
+    if out is None:
+        raise ValueError(f"part {link!r} has a handle but no grasp (see handle_grasps)")
     return skill, out
 
 

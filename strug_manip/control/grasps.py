@@ -17,7 +17,9 @@ the forearm clears low fronts and table edges), then pitched up. Each is a full
 tries them in order. Where the open finger pads would reach the part's front before the
 TCP is at the grasp point (a short knob, a steep pitch), the grasp backs off along the
 front's normal until they clear it by :data:`FACE_CLEARANCE`; a grasp that would need
-to back off so far that the handle leaves the pads is not offered.
+to back off so far that the handle leaves the pads is not offered (a bar must stay
+:data:`MIN_OVERLAP` inside the pads' tips; a knob, squeezed on its sides, must keep
+:data:`MIN_KNOB_GRIP` of its length between them).
 
 Frames: ``T_world_object`` is the cabinet's frame (its +x the front's outward normal).
 """
@@ -43,6 +45,11 @@ FACE_CLEARANCE = 0.003
 #: The handle must stay this far inside the pads' tips when a grasp backs the TCP off
 #: the front to keep the pads clear of it [m] (else that grasp is dropped).
 MIN_OVERLAP = 0.008
+#: A knob is squeezed on its sides, so it holds wherever it lies between the pads: a
+#: grasp backed off the front is kept while at least this much of the knob's length
+#: stays between the pads' tips and its end [m] (half the pads' 0.027 height, so a
+#: pitched grasp still closes on the knob's cylinder, not its rim).
+MIN_KNOB_GRIP = 0.012
 
 
 def grasp_rotation(approach: np.ndarray, bar_axis: np.ndarray | None) -> np.ndarray:
@@ -108,6 +115,7 @@ def handle_grasps(
             bars = [None, side]
     depth = float(part.handle_pos[0] - front_of_handle(part))  # TCP in front of the face
     out = []
+    slack = max_back_off(part)
     for b in bars:
         for pitch in (0.0, *PITCHES):
             approach = axis_angle(side, -pitch) @ -normal  # +pitch: tilted down
@@ -116,11 +124,35 @@ def handle_grasps(
             # The pads' deepest point toward the face, as far in front of the TCP.
             reach = float(np.max(PAD_CORNERS @ (g[:3, :3].T @ -normal)))
             back = max(0.0, reach + FACE_CLEARANCE - depth)
-            if back > PAD_CORNERS[0, 0] - MIN_OVERLAP:
+            if back > slack:
                 continue  # the pads would hit the front before they straddle the handle
             g[:3, 3] = point + back * normal
             out.append(g)
     return out
+
+
+def max_back_off(part: PartSpec) -> float:
+    """How far a grasp of ``part`` may back off its grasp point along the front's
+    normal [m]: a bar must stay :data:`MIN_OVERLAP` inside the pads' tips; a knob must
+    keep :data:`MIN_KNOB_GRIP` of its length between the tips and its end. Both use the
+    level grasp's pad reach, so a pitched grasp is held to the same margin."""
+    slack = PAD_CORNERS[0, 0] - MIN_OVERLAP
+    if part.handle == "knob":
+        beyond = knob_end(part) - float(part.handle_pos[0])  # knob in front of the point
+        slack = max(slack, PAD_CORNERS[0, 0] + beyond - MIN_KNOB_GRIP)
+    return slack
+
+
+def knob_end(part: PartSpec) -> float:
+    """The x of a knob's free end (object frame, part closed) [m]."""
+    xs = [
+        part.origin[0] + g.pos[0] + 0.5 * g.size[1]
+        for g in part.geoms
+        if g.name.startswith("handle_knob") and g.shape == "cylinder"
+    ]
+    if not xs:
+        raise ValueError(f"part {part.link!r} has no knob")
+    return float(max(xs))
 
 
 def front_of_handle(part: PartSpec) -> float:
