@@ -50,7 +50,11 @@ class SkillParams:
             in over the open flap's edge, which a low cell leaves little room for.
         flap_wrist_share: on a flap with a bar handle the gripper turns by this share of
             the flap's angle, the bar rolling between the finger pads for the rest [-]
-            (a round bar rolls under the squeeze: the flap's weight alone turns it).
+            (a round bar rolls under the squeeze: the flap's weight alone turns it). The
+            more the wrist turns the better: the more the gripper lags the flap, the more
+            the opening fingers press on the flap's face on release and push it back
+            (at half the angle drop-down flaps sprang back, no longer wide enough for the
+            object; close to the whole angle the wrist cannot follow).
         limit_margin_m, limit_margin_rad: an opening stops this short of the believed
             joint limit [m], [rad], so it never drives the part into its stop.
         probe_distance: how far Push, PullV and PullH move the gripper [m]: enough to
@@ -79,7 +83,8 @@ class SkillParams:
         time_budget: simulated time budget of one skill [s].
         plan_timeout: OMPL time budget per arm motion and planner [s] (wall): an arm
             reaching into a low drawer with the object is a narrow passage that
-            LBKPIECE1 finds in one to two seconds.
+            LBKPIECE1 finds within a second or two on an idle core; twice that leaves
+            room for a loaded machine (the timeout is wall time, not work).
         drive_tolerance: the base is driven only to targets farther than this [m].
         record_period: trajectory recording period [s].
     """
@@ -97,7 +102,7 @@ class SkillParams:
     door_angle: float = 1.75
     flap_angle: float = 1.57
     drop_angle: float = 1.57
-    flap_wrist_share: float = 0.5
+    flap_wrist_share: float = 0.7
     limit_margin_m: float = 0.02
     limit_margin_rad: float = 0.05
     probe_distance: float = 0.04
@@ -111,7 +116,7 @@ class SkillParams:
     probe_tolerance: float = 0.02
     free_tolerance: float = 0.2
     time_budget: float = 60.0
-    plan_timeout: float = 2.0
+    plan_timeout: float = 4.0
     drive_tolerance: float = 0.02
     record_period: float = 0.02
 
