@@ -18,16 +18,17 @@ Steps (:func:`fuse`):
    the handle's cue (a handle sits near the free edge). A side door open by theta looks
    exactly like the opposite-hinged door open by pi - theta; both are kept when
    pi - theta is within :data:`SIDE_DOOR_MAX` (the larger generator limit), weighted by
-   the network. The geometry also weighs the joint type (:data:`GEOMETRY_EVIDENCE`): a
-   front moved out parallel to the plane is a drawer's, a panel turned out about an
-   edge on it a door's, a closed front's centred handle a drawer's.
+   the network. A reading also says whether its front moved out parallel to the plane
+   (``moved_out``: only drawers do that) or turned out about an edge on it
+   (``turned_out``: doors), which :mod:`perception.joint_cues` weighs per view.
 3. **Association**: instances of all views, smallest first, join the fused part whose
    largest reading's closed-state rectangle overlaps theirs most (IoU >=
    :data:`ASSOC_IOU`, the best pair of interpretations: as seen, or as a door hinged on
    a side the geometry allows; one instance per view and part); an instance holding
    most of two or more fused parts is a merged region: it counts as evidence that the
    region holds several parts (``merged``) and adds to none. Each fused part gets class
-   probabilities (pixel-weighted mean over its views), hinge-side probabilities, an
+   probabilities (pixel-weighted mean over its views of the instances' probabilities,
+   which hold each view's geometric evidence), hinge-side probabilities, an
    existence probability (confidence-weighted share of the views that could see it
    that did) and the spread of its rectangle and opening over the views. Pieces of one
    open drawer (pulled out by the same centimetre, side by side) are joined.
@@ -42,11 +43,14 @@ import math
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from perception.errors import NoCabinetError
-from perception.parts import Instance, ViewParts
+
+if TYPE_CHECKING:  # parts.py runs the per-view cues, which read instances with this module
+    from perception.parts import Instance, ViewParts
 
 #: Distance of a point on the front plane from it [m].
 PLANE_TOL = 0.006
@@ -66,8 +70,8 @@ DEFAULT_DEPTH = 0.375
 #: The gap between a front and its cell [m] and a front's thickness [m] (the middle of
 #: the generator's 0.002-0.004 and 0.015-0.022 m).
 FRONT_GAP, FRONT_THICKNESS = 0.003, 0.018
-#: Likelihood of the joint types a part's geometry rules out (per view it is seen in).
-GEOMETRY_EVIDENCE = 0.2
+#: A closed-looking front this far in front of the front plane has moved out [m].
+MOVED_OUT = 0.025
 #: Sharpness of the handle's hinge-side cue (:func:`_handle_cue`).
 HANDLE_CUE = 6.0
 #: Hinge sides, as :data:`perception.articulation_net.HINGE_SIDES`.
@@ -124,9 +128,10 @@ class Reading:
             [rad]; door_ok: (4,) which sides are geometrically possible.
         closed_door: the panel lies in the front plane.
         depth_x: median front-frame x of its points [m] (shelves lie deep inside).
-        evidence: (3,) likelihood of fixed, prismatic, revolute from the geometry alone
-            (:data:`GEOMETRY_EVIDENCE`): a front moved out parallel to the front plane is
-            a drawer's; a panel turned out of it about an edge on it, a door's.
+        moved_out: its front lies parallel to the front plane, more than
+            :data:`MOVED_OUT` in front of it (only a drawer does that).
+        turned_out: it is a panel turned out of the front plane about an edge on it
+            (a door).
     """
 
     view: int
@@ -139,7 +144,8 @@ class Reading:
     door_ok: np.ndarray
     closed_door: bool
     depth_x: float
-    evidence: np.ndarray = field(default_factory=lambda: np.ones(3))
+    moved_out: bool = False
+    turned_out: bool = False
 
 
 @dataclass
@@ -375,9 +381,8 @@ def read_instance(view: int, inst: Instance, front: FrontFrame) -> Reading:
     tilt = math.acos(min(1.0, abs(float(m[0]))))
     closed = tilt < DOOR_OPEN_TILT
     primary = None
-    evidence = np.ones(3)
-    if closed and depth_x > 0.025:  # moved out, still parallel: only a drawer does that
-        evidence = np.array([GEOMETRY_EVIDENCE, 1.0, GEOMETRY_EVIDENCE])
+    moved_out = closed and depth_x > MOVED_OUT  # still parallel: only a drawer does that
+    turned_out = False
     if not closed:
         ok[:] = False
         side_door = abs(float(m[1])) > abs(float(m[2]))  # turned about a vertical line
@@ -388,8 +393,7 @@ def read_instance(view: int, inst: Instance, front: FrontFrame) -> Reading:
         hinge, free = ends if ends[0][0] <= ends[1][0] else ends[::-1]  # hinge: nearer the front
         w = s_hi - s_lo
         dirn = free - hinge
-        if abs(hinge[0]) < 0.04 and free[0] > 0.05:  # turned out about an edge on the front
-            evidence = np.array([GEOMETRY_EVIDENCE, GEOMETRY_EVIDENCE, 1.0])
+        turned_out = abs(hinge[0]) < 0.04 and free[0] > 0.05  # about an edge on the front
         if side_door:
             theta = math.atan2(max(dirn[0], 0.0), abs(dirn[1]))
             first, second = (0, 1) if dirn[1] > 0 else (1, 0)  # left if the free edge is to +y
@@ -417,7 +421,7 @@ def read_instance(view: int, inst: Instance, front: FrontFrame) -> Reading:
     rect = door_rect[primary].copy() if as_door else face_rect
     return Reading(
         view, inst, rect, face_rect, max(depth_x, 0.0), door_rect, door_q, ok, closed, depth_x,
-        evidence,
+        bool(moved_out), bool(turned_out),
     )  # fmt: skip
 
 
@@ -462,21 +466,6 @@ def _handle_cue(handle: np.ndarray, rect: np.ndarray) -> np.ndarray:
     return e / e.sum()
 
 
-def _handle_class_cue(handle: np.ndarray, rect: np.ndarray) -> np.ndarray:
-    """Joint-type likelihoods (3,) from a closed front's handle: fixed fronts have none; a
-    drawer's is centred; a door's is near its free edge (at least half-way from the
-    centre to the edge, as the generator and most furniture place them)."""
-    u = (handle[1] - 0.5 * (rect[0] + rect[1])) / max(0.5 * (rect[1] - rect[0]), 1e-3)
-    v = (handle[2] - 0.5 * (rect[2] + rect[3])) / max(0.5 * (rect[3] - rect[2]), 1e-3)
-    off = max(abs(u), abs(v))
-    g = GEOMETRY_EVIDENCE
-    if off < 0.3:
-        return np.array([g, 1.0, g])
-    if off > 0.45:
-        return np.array([g, g, 1.0])
-    return np.array([g, 1.0, 1.0])
-
-
 def _summarise(
     group: list[Reading], merged: int, visible: int, front: FrontFrame
 ) -> PartHypothesis:
@@ -484,8 +473,8 @@ def _summarise(
     wts /= wts.sum()
     rects = np.stack([r.face_rect for r in group])
     rect = np.median(rects, axis=0) if len(group) > 2 else (wts[:, None] * rects).sum(axis=0)
-    cls = (wts[:, None] * np.stack([r.instance.class_prob for r in group])).sum(axis=0)
-    cls = cls * np.prod(np.stack([r.evidence for r in group]), axis=0) + 1e-9
+    # Each view's probabilities already hold its geometric evidence (joint_cues).
+    cls = (wts[:, None] * np.stack([r.instance.class_prob for r in group])).sum(axis=0) + 1e-9
     net = (wts[:, None] * np.stack([r.instance.hinge_prob for r in group])).sum(axis=0)
     # Geometry: an open panel allows only the sides it can be hinged on.
     ok = np.all(np.stack([r.door_ok for r in group]), axis=0)
@@ -509,7 +498,6 @@ def _summarise(
     )
     if handle is not None and all(r.closed_door for r in group):
         hinge = hinge * _handle_cue(handle, rect)
-        cls = cls * _handle_class_cue(handle, rect)
     return PartHypothesis(
         rect=rect,
         rect_std=rects.std(axis=0),
