@@ -47,7 +47,7 @@ from pathlib import Path
 
 import numpy as np
 
-from perception.affordance import sample_grasps
+from perception.affordance import SHARPNESS, sample_grasps
 from perception.fusion import fuse, rect_iou
 from perception.inputs import check_view
 from perception.parts import Perceiver
@@ -61,12 +61,12 @@ from strug_manip.world import ManipulationWorld, SceneConfig
 from strug_manip.world.views import take_views
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from eval_perception import hypothesis_joint, parse_seeds, true_parts  # noqa: E402
+from eval_perception import hypothesis_joint, parse_seeds, true_parts
 
 #: Share of the commanded travel the part must follow for a grasp to count as held.
 MOVED_SHARE = 0.5
 #: The samplers compared: name -> ``sharpness`` of :func:`sample_grasps`.
-SAMPLERS = {"affordance": None, "uniform": 0.0}
+SAMPLERS = {"affordance": SHARPNESS, "uniform": 0.0}
 
 
 def pitched(g: np.ndarray, pitch: float) -> np.ndarray:
@@ -135,15 +135,16 @@ def run_cabinet(seed: int, n: int, perceiver: Perceiver, ctx: ControlContext) ->
             k = int(np.argmax(scores))
             joint = BelievedJoint.of_part(part, 0.0, T)
             drawn = {
-                name: sample_grasps(fused, k, n, rng, tp["type"], **({} if s is None else
-                                    {"sharpness": s}))  # fmt: skip
+                name: sample_grasps(fused, k, n, rng, tp["type"], sharpness=s)
                 for name, s in SAMPLERS.items()
             }
             for i in range(n):
                 for name, (gs, pull) in drawn.items():
                     outcome, moved = run_grasp(world, gs[i], part, joint, ctx, start)
-                    runs.append(dict(sampler=name, kind=part.kind, outcome=outcome,
-                                     motion=round(moved, 4), pull=round(float(pull[i]), 3)))  # fmt: skip
+                    runs.append(
+                        dict(sampler=name, kind=part.kind, outcome=outcome,
+                             motion=round(moved, 4), pull=round(float(pull[i]), 3))
+                    )  # fmt: skip
     finally:
         world.close()
     return dict(
