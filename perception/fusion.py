@@ -41,6 +41,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
+from collections import Counter, deque
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
@@ -61,6 +62,11 @@ SIDE_DOOR_MAX = 2.2
 #: Instances whose closed-state rectangles overlap at least this much (IoU, best pair
 #: of interpretations) are one part.
 ASSOC_IOU = 0.3
+#: A reading takes its view's place in a group from one that matches the group's
+#: reference worse by this much (IoU) ...
+SWAP_MARGIN = 0.2
+#: ... and a reading is displaced at most this often (the association ends).
+MAX_EVICTIONS = 2
 #: A front narrower or lower than this is a measurement failure [m] (the generator's
 #: smallest cabinet is 0.35 x 0.30 m).
 MIN_FRONT = 0.2
@@ -466,6 +472,16 @@ def _handle_cue(handle: np.ndarray, rect: np.ndarray) -> np.ndarray:
     return e / e.sum()
 
 
+def _existence(group: list[Reading], *visible: int) -> float:
+    """Confidence-weighted share of the views that could see a part that did: per view
+    its most confident reading (pieces of one front count once), over the most views
+    that could see it (``visible``), with a prior of 0.1 in 0.2."""
+    conf: dict[int, float] = {}
+    for r in group:
+        conf[r.view] = max(conf.get(r.view, 0.0), r.instance.part_prob)
+    return float(min((sum(conf.values()) + 0.1) / (max(*visible, len(conf)) + 0.2), 1.0))
+
+
 def _summarise(
     group: list[Reading], merged: int, visible: int, front: FrontFrame
 ) -> PartHypothesis:
@@ -488,8 +504,7 @@ def _summarise(
         if rows:
             door_q[k] = float(np.median([r.door_q[k] for r in rows]))
             door_rect[k] = np.median(np.stack([r.door_rect[k] for r in rows]), axis=0)
-    conf = sum(r.instance.part_prob for r in group)
-    existence = (conf + 0.1) / (max(visible, len(group)) + 0.2)
+    existence = _existence(group, visible)
     handles = [
         (r.instance.handle, r.instance.handle_score) for r in group if r.instance.handle is not None
     ]
@@ -502,7 +517,7 @@ def _summarise(
         rect=rect,
         rect_std=rects.std(axis=0),
         class_prob=cls / cls.sum(),
-        existence=float(min(existence, 1.0)),
+        existence=existence,
         hinge_prob=hinge / hinge.sum(),
         door_rect=door_rect,
         door_q=door_q,
@@ -522,6 +537,63 @@ def _candidates(r: Reading) -> list[np.ndarray]:
     """The closed-state rectangles a reading may stand for: as seen, as associated, and
     as a door hinged on each side its geometry allows."""
     return [r.rect, r.face_rect, *(r.door_rect[k] for k in range(4) if r.door_ok[k])]
+
+
+def _match(r: Reading, ref: Reading) -> float:
+    """How well reading ``r`` matches a group's reference reading: the best IoU over
+    their pairs of candidate rectangles."""
+    return max(rect_iou(a, b) for a in _candidates(r) for b in _candidates(ref))
+
+
+def _associate(readings: list[Reading]) -> tuple[list[list[Reading]], list[int]]:
+    """Readings (smallest first) into groups of one part each, and per group the views
+    in which it was part of a merged region (module docstring, step 3).
+
+    A reading whose best group already holds a reading of its view takes that place if
+    it matches the group's reference (its largest reading) better by
+    :data:`SWAP_MARGIN`; the reading it displaces is placed again (at most
+    :data:`MAX_EVICTIONS` times). Small fragments (a strip of an open cell) otherwise
+    keep the view's slot of a part whose whole front that view saw, and the front
+    starts a second hypothesis of the same part."""
+    queue = deque(readings)
+    groups: list[list[Reading]] = []
+    refs: list[Reading] = []  # each group's largest reading
+    merged: list[int] = []
+    evicted: Counter[int] = Counter()
+    while queue:
+        r = queue.popleft()
+        # A merged region: it covers two or more parts that each fill little of it.
+        covered = [
+            k for k, g in enumerate(refs)
+            if g is not r and _covered(g.rect, r.rect) > 0.7 and rect_iou(g.rect, r.rect) < 0.6
+        ]  # fmt: skip
+        if len(covered) >= 2:
+            for k in covered:
+                merged[k] += 1
+            continue
+        scores = [_match(r, g) for g in refs]
+        placed = False
+        for k in np.argsort(scores, kind="stable")[::-1]:
+            if scores[k] < ASSOC_IOU:
+                break
+            occupant = next((g for g in groups[k] if g.view == r.view), None)
+            if occupant is not None:
+                if evicted[id(occupant)] >= MAX_EVICTIONS or occupant is refs[k]:
+                    continue
+                if scores[k] < _match(occupant, refs[k]) + SWAP_MARGIN:
+                    continue
+                groups[k] = [g for g in groups[k] if g is not occupant]
+                evicted[id(occupant)] += 1
+                queue.appendleft(occupant)
+            groups[k].append(r)
+            refs[k] = max(groups[k], key=lambda g: (g.instance.pixels, -g.view))
+            placed = True
+            break
+        if not placed:
+            groups.append([r])
+            refs.append(r)
+            merged.append(0)
+    return groups, merged
 
 
 def fuse(views: Sequence[ViewParts]) -> FusedCabinet:
@@ -544,33 +616,7 @@ def fuse(views: Sequence[ViewParts]) -> FusedCabinet:
     )
     readings = [r for r in readings if _covered(r.rect, box) > 0.8]
     readings.sort(key=lambda r: (r.instance.pixels, r.view))
-    groups: list[list[Reading]] = []
-    refs: list[Reading] = []  # each group's largest reading
-    merged: list[int] = []
-    for r in readings:
-        cands = _candidates(r)
-        # A merged region: it covers two or more parts that each fill little of it.
-        covered = [
-            k for k, g in enumerate(refs)
-            if _covered(g.rect, r.rect) > 0.7 and rect_iou(g.rect, r.rect) < 0.6
-        ]  # fmt: skip
-        if len(covered) >= 2:
-            for k in covered:
-                merged[k] += 1
-            continue
-        scores = [max(rect_iou(a, b) for a in cands for b in _candidates(g)) for g in refs]
-        free = [
-            k for k in np.argsort(scores)[::-1]
-            if scores[k] >= ASSOC_IOU and all(g.view != r.view for g in groups[k])
-        ]  # fmt: skip
-        if free:
-            groups[free[0]].append(r)
-            if r.instance.pixels > refs[free[0]].instance.pixels:
-                refs[free[0]] = r
-        else:
-            groups.append([r])
-            refs.append(r)
-            merged.append(0)
+    groups, merged = _associate(readings)
     parts = []
     for grp, mg in zip(groups, merged, strict=True):
         rect = np.median(np.stack([g.rect for g in grp]), axis=0)
@@ -610,15 +656,17 @@ def _join_open_fragments(parts: list[PartHypothesis]) -> list[PartHypothesis]:
                 rect = np.array([min(ra[0], rb[0]), max(ra[1], rb[1]),
                                  min(ra[2], rb[2]), max(ra[3], rb[3])])  # fmt: skip
                 big, small = (a, b) if a.views * a.existence >= b.views * b.existence else (b, a)
+                readings = big.readings + small.readings
                 out[i] = dataclasses.replace(
                     big,
                     rect=rect,
                     door_rect=np.tile(rect, (4, 1)),
-                    existence=max(a.existence, b.existence),
-                    views=max(a.views, b.views),
+                    existence=max(a.existence, b.existence, _existence(readings, a.visible,
+                                                                       b.visible)),
+                    views=len({r.view for r in readings}),
                     handle=big.handle if big.handle is not None else small.handle,
-                    readings=big.readings + small.readings,
-                )
+                    readings=readings,
+                )  # fmt: skip
                 del out[j]
                 joined = True
                 break
