@@ -25,7 +25,7 @@ from perception.errors import BadInputError
 from perception.fusion import FusedCabinet
 
 #: Exponent and floor of the sampling weights.
-SHARPNESS, FLOOR = 2.0, 0.01
+SHARPNESS, FLOOR = 2.0, 1e-4
 #: Affordance above which a pixel counts as handle for the bar direction.
 HANDLE_P = 0.5
 

@@ -67,6 +67,13 @@ ASSOC_IOU = 0.3
 SWAP_MARGIN = 0.2
 #: ... and a reading is displaced at most this often (the association ends).
 MAX_EVICTIONS = 2
+#: Groups whose largest reading's seen face is narrower or lower than this [m] (a strip
+#: of an open cell's floor, read as a flap turned down) do not make a reading that
+#: covers them a merged region (the generator's cells are at least 0.12 x 0.20 m).
+MIN_PART = 0.06
+#: Match score of two open panels turned about one hinge line, within this [m] and
+#: with openings within this [rad] of each other.
+HINGE_MATCH, HINGE_TOL, OPENING_TOL = 0.6, 0.03, 0.3
 #: A front narrower or lower than this is a measurement failure [m] (the generator's
 #: smallest cabinet is 0.35 x 0.30 m).
 MIN_FRONT = 0.2
@@ -541,8 +548,34 @@ def _candidates(r: Reading) -> list[np.ndarray]:
 
 def _match(r: Reading, ref: Reading) -> float:
     """How well reading ``r`` matches a group's reference reading: the best IoU over
-    their pairs of candidate rectangles."""
-    return max(rect_iou(a, b) for a in _candidates(r) for b in _candidates(ref))
+    their pairs of candidate rectangles, or :data:`HINGE_MATCH` for two open panels
+    turned about one hinge line (:func:`_same_hinge`), whose rectangles differ with
+    how much of the panel each view saw."""
+    iou = max(rect_iou(a, b) for a in _candidates(r) for b in _candidates(ref))
+    return max(iou, HINGE_MATCH) if _same_hinge(r, ref) else iou
+
+
+def _same_hinge(a: Reading, b: Reading) -> bool:
+    """Two open panels with a hinge side both allow, their hinge lines within
+    :data:`HINGE_TOL` of each other, their openings within :data:`OPENING_TOL`, and
+    overlapping along the hinge by half the shorter one."""
+    if a.closed_door or b.closed_door:
+        return False
+    for k in range(4):
+        if not (a.door_ok[k] and b.door_ok[k]):
+            continue
+        edge = (0, 1, 3, 2)[k]  # the rectangle's coordinate on the hinge line
+        ra, rb = a.door_rect[k], b.door_rect[k]
+        lo, hi = (2, 3) if k < 2 else (0, 1)  # along the hinge
+        overlap = min(ra[hi], rb[hi]) - max(ra[lo], rb[lo])
+        shorter = min(ra[hi] - ra[lo], rb[hi] - rb[lo])
+        if (
+            abs(ra[edge] - rb[edge]) < HINGE_TOL
+            and abs(a.door_q[k] - b.door_q[k]) < OPENING_TOL
+            and overlap > 0.5 * shorter
+        ):
+            return True
+    return False
 
 
 def _associate(readings: list[Reading]) -> tuple[list[list[Reading]], list[int]]:
@@ -565,7 +598,8 @@ def _associate(readings: list[Reading]) -> tuple[list[list[Reading]], list[int]]
         # A merged region: it covers two or more parts that each fill little of it.
         covered = [
             k for k, g in enumerate(refs)
-            if g is not r and _covered(g.rect, r.rect) > 0.7 and rect_iou(g.rect, r.rect) < 0.6
+            if _covered(g.rect, r.rect) > 0.7 and rect_iou(g.rect, r.rect) < 0.6
+            and min(g.face_rect[1] - g.face_rect[0], g.face_rect[3] - g.face_rect[2]) >= MIN_PART
         ]  # fmt: skip
         if len(covered) >= 2:
             for k in covered:
