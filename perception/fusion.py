@@ -25,7 +25,8 @@ Steps (:func:`fuse`):
    largest reading's closed-state rectangle overlaps theirs most (IoU >=
    :data:`ASSOC_IOU`, the best pair of interpretations: as seen, or as a door hinged on
    a side the geometry allows; one instance per view and part); an instance holding
-   most of two or more fused parts is a merged region: it counts as evidence that the
+   most of two or more fused parts that lie apart (a divider between them) is a merged
+   region: it counts as evidence that the
    region holds several parts (``merged``) and adds to none. Each fused part gets class
    probabilities (pixel-weighted mean over its views of the instances' probabilities,
    which hold each view's geometric evidence), hinge-side probabilities, an
@@ -71,6 +72,10 @@ MAX_EVICTIONS = 2
 #: of an open cell's floor, read as a flap turned down) do not make a reading that
 #: covers them a merged region (the generator's cells are at least 0.12 x 0.20 m).
 MIN_PART = 0.06
+#: Parts a merged region covers lie this far apart at least [m]: a divider (the
+#: generator's boards are 0.015-0.020 m) less the rectangles' noise. Pieces of one
+#: front touch or overlap: a reading that covers those is that front.
+MERGE_GAP = 0.007
 #: Match score of two open panels turned about one hinge line, within this [m] and
 #: with openings within this [rad] of each other.
 HINGE_MATCH, HINGE_TOL, OPENING_TOL = 0.6, 0.03, 0.3
@@ -479,6 +484,14 @@ def _handle_cue(handle: np.ndarray, rect: np.ndarray) -> np.ndarray:
     return e / e.sum()
 
 
+def _weighted_median(v: np.ndarray, w: np.ndarray) -> float:
+    """The median of values ``v`` (N,) under weights ``w`` (N,): a fragment seen in
+    one view does not pull a drawer's opening to its own."""
+    order = np.argsort(v, kind="stable")
+    c = np.cumsum(w[order])
+    return float(v[order][np.searchsorted(c, 0.5 * c[-1])])
+
+
 def _existence(group: list[Reading], *visible: int) -> float:
     """Confidence-weighted share of the views that could see a part that did: per view
     its most confident reading (pieces of one front count once), over the most views
@@ -528,7 +541,7 @@ def _summarise(
         hinge_prob=hinge / hinge.sum(),
         door_rect=door_rect,
         door_q=door_q,
-        q_drawer=float(np.median([r.q_drawer for r in group])),
+        q_drawer=_weighted_median(np.array([r.q_drawer for r in group]), wts),
         q_std=float(np.std([r.q_drawer for r in group])),
         handle=handle,
         handle_score=float(max((s for _, s in handles), default=0.0)),
@@ -578,6 +591,12 @@ def _same_hinge(a: Reading, b: Reading) -> bool:
     return False
 
 
+def _apart(a: np.ndarray, b: np.ndarray) -> bool:
+    """Two closed-state rectangles lie apart by at least :data:`MERGE_GAP` (a divider
+    between two cells), in y or in z."""
+    return max(max(a[0], b[0]) - min(a[1], b[1]), max(a[2], b[2]) - min(a[3], b[3])) >= MERGE_GAP
+
+
 def _associate(readings: list[Reading]) -> tuple[list[list[Reading]], list[int]]:
     """Readings (smallest first) into groups of one part each, and per group the views
     in which it was part of a merged region (module docstring, step 3).
@@ -601,7 +620,7 @@ def _associate(readings: list[Reading]) -> tuple[list[list[Reading]], list[int]]
             if _covered(g.rect, r.rect) > 0.7 and rect_iou(g.rect, r.rect) < 0.6
             and min(g.face_rect[1] - g.face_rect[0], g.face_rect[3] - g.face_rect[2]) >= MIN_PART
         ]  # fmt: skip
-        if len(covered) >= 2:
+        if any(_apart(refs[i].rect, refs[j].rect) for i in covered for j in covered):
             for k in covered:
                 merged[k] += 1
             continue
