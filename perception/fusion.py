@@ -90,6 +90,9 @@ DEFAULT_DEPTH = 0.375
 FRONT_GAP, FRONT_THICKNESS = 0.003, 0.018
 #: A closed-looking front this far in front of the front plane has moved out [m].
 MOVED_OUT = 0.025
+#: An open panel's seen end nearest the front plane further out than this has its hinge
+#: hidden [m]; the hinge is then extrapolated along the panel, at most this far [m].
+HIDDEN_HINGE, MAX_HIDDEN = 0.03, 0.3
 #: Sharpness of the handle's hinge-side cue (:func:`_handle_cue`).
 HANDLE_CUE = 6.0
 #: Hinge sides, as :data:`perception.articulation_net.HINGE_SIDES`.
@@ -412,6 +415,15 @@ def read_instance(view: int, inst: Instance, front: FrontFrame) -> Reading:
         w = s_hi - s_lo
         dirn = free - hinge
         turned_out = abs(hinge[0]) < 0.04 and free[0] > 0.05  # about an edge on the front
+        u = dirn / max(float(np.linalg.norm(dirn)), 1e-9)
+        # The hinge end hidden (a flap open above shades it): the hinge is where the
+        # panel's plane meets the front plane, on the seen (outer) face of a side door
+        # or a lifted top flap.
+        back = float(hinge[0]) / u[0] if u[0] > 0.1 else math.inf
+        hidden = hinge[0] > HIDDEN_HINGE and (side_door or u[2] < 0) and back < MAX_HIDDEN
+        if hidden:
+            hinge = hinge - back * u
+            w += back
         if side_door:
             theta = math.atan2(max(dirn[0], 0.0), abs(dirn[1]))
             first, second = (0, 1) if dirn[1] > 0 else (1, 0)  # left if the free edge is to +y
@@ -428,7 +440,9 @@ def read_instance(view: int, inst: Instance, front: FrontFrame) -> Reading:
             side = 2 if dirn[2] < 0 else 3  # top hinge if the free edge hangs below
             # A top hinge sits on the panel's back face: the seen edge rose by about
             # FRONT_THICKNESS * sin(theta) as it turned.
-            z_h = float(hinge[2]) - (FRONT_THICKNESS * math.sin(theta) if side == 2 else 0.0)
+            # (On the front plane, extrapolated: FRONT_THICKNESS * tan(theta / 2).)
+            rise = math.tan(0.5 * theta) if hidden else math.sin(theta)
+            z_h = float(hinge[2]) - (FRONT_THICKNESS * rise if side == 2 else 0.0)
             ylo2, yhi2 = _extent(P[:, 1])
             span = (z_h - w - g, z_h + g) if side == 2 else (z_h - g, z_h + w + g)
             ok[side] = True

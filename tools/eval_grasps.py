@@ -83,6 +83,7 @@ def pitched(g: np.ndarray, pitch: float) -> np.ndarray:
 
 def run_grasp(world, g, part, joint, ctx, start) -> tuple[str, float]:
     """One sampled grasp (module docstring): ``(outcome, part motion [m or rad])``."""
+    world.restore(start)
     try:
         link, joint_name, _ = part_at(world, g)
     except UnknownNameError:
