@@ -85,6 +85,8 @@ MIN_FRONT = 0.2
 #: Depth of the carcass when its top and sides are not seen: the middle of the
 #: generator's 0.30-0.45 m range [m].
 DEFAULT_DEPTH = 0.375
+#: Deepest carcass behind its front the fit accepts: the generator's 0.45 m plus a margin.
+MAX_DEPTH = 0.52
 #: The gap between a front and its cell [m] and a front's thickness [m] (the middle of
 #: the generator's 0.002-0.004 and 0.015-0.022 m).
 FRONT_GAP, FRONT_THICKNESS = 0.003, 0.018
@@ -226,7 +228,11 @@ class FusedCabinet:
 
 # --- the front plane ------------------------------------------------------------------
 def fit_front(
-    points: np.ndarray, normals: np.ndarray, carcass: np.ndarray, cameras: np.ndarray
+    points: np.ndarray,
+    normals: np.ndarray,
+    carcass: np.ndarray,
+    cameras: np.ndarray,
+    max_depth: float | None = MAX_DEPTH,
 ) -> tuple[np.ndarray, float, np.ndarray]:
     """The cabinet's front: a vertical plane facing the cameras.
 
@@ -238,7 +244,8 @@ def fit_front(
     (in front of it, no carcass), at the back panel seen through open cells (behind it)
     and at thin carcass-looking strips (an open door's edge); the front is the peak with
     the most carcass points on it less twice the carcass points 2 cm or more in front of
-    it (the carcass lies behind its front).
+    it (the carcass lies behind its front), among the peaks with at most ``max_depth``
+    of carcass behind them (None: any).
 
     Args:
         points: (N, 3) world points of the cabinet [m]; normals: (N, 3) their unit
@@ -280,7 +287,15 @@ def fit_front(
     # Carcass on the plane, minus twice the carcass in front of it (2 cm and more).
     ahead = np.cumsum(hist_c[::-1])[::-1]  # carcass points in bin k and beyond
     score = [smooth_c[k] - 2.0 * (ahead[k + 5] if k + 5 < len(ahead) else 0) for k in peaks]
-    k = peaks[int(np.argmax(score))] if peaks else int(np.argmax(smooth))
+    # No carcass is deeper than the generator's 0.45 m: a plane with carcass further
+    # behind it is an open drawer's front.
+    if max_depth is not None and carcass.sum() >= 20:
+        back = float(np.percentile(off[carcass], 2.0))
+        score = [
+            sc if lo + (k + 0.5) * 0.004 - back <= max_depth else -np.inf
+            for k, sc in zip(peaks, score, strict=True)
+        ]
+    k = peaks[int(np.argmax(score))] if peaks and max(score) > -np.inf else int(np.argmax(smooth))
     d = float(lo + (k + 0.5) * 0.004)
     inl = np.abs(off - d) < PLANE_TOL
     d = float(np.median(off[inl]))
@@ -309,8 +324,9 @@ def _run(v: np.ndarray, bin_size: float = 0.01, max_gap: int = 8) -> tuple[float
     return float(inside.min()), float(inside.max())
 
 
-def front_frame(views: Sequence[ViewParts]) -> FrontFrame:
-    """The :class:`FrontFrame` from the cabinet points of every view."""
+def front_frame(views: Sequence[ViewParts], max_depth: float | None = MAX_DEPTH) -> FrontFrame:
+    """The :class:`FrontFrame` from the cabinet points of every view (``max_depth``:
+    :func:`fit_front`'s)."""
     seen = [v for v in views if v.sees_cabinet]
     if not seen:
         raise NoCabinetError(
@@ -321,7 +337,7 @@ def front_frame(views: Sequence[ViewParts]) -> FrontFrame:
     cams = np.stack([v.T_world_camera[:3, 3] for v in seen])
     carcass = np.concatenate([v.cabinet_class == 1 for v in seen])
     normals = np.concatenate([v.cabinet_normals for v in seen])
-    n, d, inl = fit_front(pts, normals, carcass, cams)
+    n, d, inl = fit_front(pts, normals, carcass, cams, max_depth)
     z = np.array([0.0, 0.0, 1.0])
     y = np.cross(z, n)
     R = np.stack([n, y, z], axis=1)
@@ -697,9 +713,10 @@ def fuse(views: Sequence[ViewParts]) -> FusedCabinet:
 def _join_open_fragments(parts: list[PartHypothesis]) -> list[PartHypothesis]:
     """Join drawer hypotheses that are pieces of one open drawer front: both pulled out
     (more than 2 cm) by the same amount (within 1 cm), side by side or one above the
-    other within 8 cm, spanning the same rows or columns. Two real drawers are never
-    pulled out by the same centimetre by chance; at the front plane a divider would
-    separate them."""
+    other within 8 cm, spanning the same rows or columns. Two real drawers are rarely
+    pulled out by the same centimetre; when they are, a divider separates them, so two
+    hypotheses seen in three views or more join only if they lie closer than
+    :data:`MERGE_GAP`."""
     out = list(parts)
     joined = True
     while joined:
@@ -716,8 +733,10 @@ def _join_open_fragments(parts: list[PartHypothesis]) -> list[PartHypothesis]:
                 gap_z = max(ra[2], rb[2]) - min(ra[3], rb[3])
                 span_z = min(ra[3], rb[3]) - max(ra[2], rb[2])
                 span_y = min(ra[1], rb[1]) - max(ra[0], rb[0])
-                side = gap_y < 0.08 and span_z > 0.8 * min(ra[3] - ra[2], rb[3] - rb[2])
-                stack = gap_z < 0.08 and span_y > 0.8 * min(ra[1] - ra[0], rb[1] - rb[0])
+                # Two fronts each seen whole from most views, a divider apart: two drawers.
+                reach = MERGE_GAP if min(a.views, b.views) >= 3 else 0.08
+                side = gap_y < reach and span_z > 0.8 * min(ra[3] - ra[2], rb[3] - rb[2])
+                stack = gap_z < reach and span_y > 0.8 * min(ra[1] - ra[0], rb[1] - rb[0])
                 if not (side or stack):
                     continue
                 rect = np.array([min(ra[0], rb[0]), max(ra[1], rb[1]),

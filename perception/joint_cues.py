@@ -167,7 +167,8 @@ def apply_joint_cues(vp: ViewParts, front: FrontFrame | None = None) -> ViewPart
         return vp
     if front is None:
         try:
-            front = front_frame([vp])
+            # One view may not see the carcass's back: no depth bound on its front.
+            front = front_frame([vp], max_depth=None)
         except NoCabinetError:
             return vp
     R = front.T_world_front[:3, :3]
