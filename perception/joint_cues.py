@@ -1,8 +1,8 @@
 """Joint-type evidence from one view's geometry: what the network's class head cannot
 be trusted with on its own.
 
-The network reads a front's joint type from its looks, and on the tuning cabinets
-(3000-3099) it got 85% of the parts seen right. Its mistakes have geometric causes:
+The network reads a front's joint type from its looks; its mistakes on the tuning
+cabinets have geometric causes (figures: the README's perception section):
 
 * an open bottom-hinged flap (a board turned down in front of its cell) is taken for
   an open drawer;
