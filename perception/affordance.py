@@ -7,7 +7,12 @@ view that saw it) with probability proportional to ``pull ** SHARPNESS + FLOOR``
 (``pull`` the network's probability that the pixel is a handle; the floor keeps every
 pixel of the part possible, so a handle-less front can still be pushed or pulled at),
 its world point as the grasp point, the approach straight into the cabinet front, the
-fingers straddling the handle.
+fingers straddling the handle. A point on the handle (pull > :data:`SNAP_P`) is moved
+onto the line of the bar through the middle of the handle's pixels, within
+:data:`BAR_MIDDLE` of that middle (its depth kept): a pull
+there does not twist the part, and the skills find the handle a grasp is on by its
+middle (:data:`strug_manip.control.skills.HANDLE_RADIUS`), so a grasp near the end of a
+20 cm bar would not be taken for that handle's.
 
 Gripper frame (the skills' convention, :mod:`strug_manip.control`): the ``gripper``
 site's x axis is the approach direction (out of the palm), y the direction in which the
@@ -25,9 +30,14 @@ from perception.errors import BadInputError
 from perception.fusion import FusedCabinet
 
 #: Exponent and floor of the sampling weights.
-SHARPNESS, FLOOR = 2.0, 0.01
+SHARPNESS, FLOOR = 2.0, 1e-4
 #: Affordance above which a pixel counts as handle for the bar direction.
 HANDLE_P = 0.5
+#: Affordance above which a grasp point counts as on the handle (its edge pixels too).
+SNAP_P = 0.2
+#: A grasp point on the handle lies at most this far from the handle's middle along
+#: its bar [m].
+BAR_MIDDLE = 0.02
 
 
 def grasp_frame(approach: np.ndarray, bar: np.ndarray) -> np.ndarray:
@@ -78,10 +88,13 @@ def sample_grasps(
     normal = front.dir_to_world([1.0, 0.0, 0.0])
     kind = joint_type or h.joint_type
     handle = pts[pull > HANDLE_P]
+    middle = along = None
     if len(handle) >= 5:
         local = front.to_front(handle)[:, 1:]
+        middle = np.median(local, axis=0)
         _, _, vt = np.linalg.svd(local - local.mean(axis=0), full_matrices=False)
-        bar = front.dir_to_world([0.0, *vt[0]])
+        along = vt[0]
+        bar = front.dir_to_world([0.0, *along])
     elif kind == "revolute" and h.side in ("left", "right"):
         bar = front.dir_to_world([0.0, 0.0, 1.0])
     else:
@@ -91,5 +104,10 @@ def sample_grasps(
     R = grasp_frame(-normal, bar)
     T = np.tile(np.eye(4), (n, 1, 1))
     T[:, :3, :3] = R
-    T[:, :3, 3] = pts[idx]
+    p = front.to_front(pts[idx])
+    if middle is not None:  # on the handle: toward its middle (module docstring)
+        on = pull[idx] > SNAP_P
+        off = np.clip((p[:, 1:] - middle) @ along, -BAR_MIDDLE, BAR_MIDDLE)
+        p[on, 1:] = middle + off[on, None] * along
+    T[:, :3, 3] = front.to_world(p)
     return T, pull[idx]

@@ -18,16 +18,18 @@ Steps (:func:`fuse`):
    the handle's cue (a handle sits near the free edge). A side door open by theta looks
    exactly like the opposite-hinged door open by pi - theta; both are kept when
    pi - theta is within :data:`SIDE_DOOR_MAX` (the larger generator limit), weighted by
-   the network. The geometry also weighs the joint type (:data:`GEOMETRY_EVIDENCE`): a
-   front moved out parallel to the plane is a drawer's, a panel turned out about an
-   edge on it a door's, a closed front's centred handle a drawer's.
+   the network. A reading also says whether its front moved out parallel to the plane
+   (``moved_out``: only drawers do that) or turned out about an edge on it
+   (``turned_out``: doors), which :mod:`perception.joint_cues` weighs per view.
 3. **Association**: instances of all views, smallest first, join the fused part whose
    largest reading's closed-state rectangle overlaps theirs most (IoU >=
    :data:`ASSOC_IOU`, the best pair of interpretations: as seen, or as a door hinged on
    a side the geometry allows; one instance per view and part); an instance holding
-   most of two or more fused parts is a merged region: it counts as evidence that the
+   most of two or more fused parts that lie apart (a divider between them) is a merged
+   region: it counts as evidence that the
    region holds several parts (``merged``) and adds to none. Each fused part gets class
-   probabilities (pixel-weighted mean over its views), hinge-side probabilities, an
+   probabilities (pixel-weighted mean over its views of the instances' probabilities,
+   which hold each view's geometric evidence), hinge-side probabilities, an
    existence probability (confidence-weighted share of the views that could see it
    that did) and the spread of its rectangle and opening over the views. Pieces of one
    open drawer (pulled out by the same centimetre, side by side) are joined.
@@ -40,13 +42,17 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
+from collections import Counter, deque
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from perception.errors import NoCabinetError
-from perception.parts import Instance, ViewParts
+
+if TYPE_CHECKING:  # parts.py runs the per-view cues, which read instances with this module
+    from perception.parts import Instance, ViewParts
 
 #: Distance of a point on the front plane from it [m].
 PLANE_TOL = 0.006
@@ -57,17 +63,38 @@ SIDE_DOOR_MAX = 2.2
 #: Instances whose closed-state rectangles overlap at least this much (IoU, best pair
 #: of interpretations) are one part.
 ASSOC_IOU = 0.3
+#: A reading takes its view's place in a group from one that matches the group's
+#: reference worse by this much (IoU) ...
+SWAP_MARGIN = 0.2
+#: ... and a reading is displaced at most this often (the association ends).
+MAX_EVICTIONS = 2
+#: Groups whose largest reading's seen face is narrower or lower than this [m] (a strip
+#: of an open cell's floor, read as a flap turned down) do not make a reading that
+#: covers them a merged region (the generator's cells are at least 0.12 x 0.20 m).
+MIN_PART = 0.06
+#: Parts a merged region covers lie this far apart at least [m]: a divider (the
+#: generator's boards are 0.015-0.020 m) less the rectangles' noise. Pieces of one
+#: front touch or overlap: a reading that covers those is that front.
+MERGE_GAP = 0.007
+#: Match score of two open panels turned about one hinge line, within this [m] and
+#: with openings within this [rad] of each other.
+HINGE_MATCH, HINGE_TOL, OPENING_TOL = 0.6, 0.03, 0.3
 #: A front narrower or lower than this is a measurement failure [m] (the generator's
 #: smallest cabinet is 0.35 x 0.30 m).
 MIN_FRONT = 0.2
 #: Depth of the carcass when its top and sides are not seen: the middle of the
 #: generator's 0.30-0.45 m range [m].
 DEFAULT_DEPTH = 0.375
+#: Deepest carcass behind its front the fit accepts: the generator's 0.45 m plus a margin.
+MAX_DEPTH = 0.52
 #: The gap between a front and its cell [m] and a front's thickness [m] (the middle of
 #: the generator's 0.002-0.004 and 0.015-0.022 m).
 FRONT_GAP, FRONT_THICKNESS = 0.003, 0.018
-#: Likelihood of the joint types a part's geometry rules out (per view it is seen in).
-GEOMETRY_EVIDENCE = 0.2
+#: A closed-looking front this far in front of the front plane has moved out [m].
+MOVED_OUT = 0.025
+#: An open panel's seen end nearest the front plane further out than this has its hinge
+#: hidden [m]; the hinge is then extrapolated along the panel, at most this far [m].
+HIDDEN_HINGE, MAX_HIDDEN = 0.03, 0.3
 #: Sharpness of the handle's hinge-side cue (:func:`_handle_cue`).
 HANDLE_CUE = 6.0
 #: Hinge sides, as :data:`perception.articulation_net.HINGE_SIDES`.
@@ -124,9 +151,10 @@ class Reading:
             [rad]; door_ok: (4,) which sides are geometrically possible.
         closed_door: the panel lies in the front plane.
         depth_x: median front-frame x of its points [m] (shelves lie deep inside).
-        evidence: (3,) likelihood of fixed, prismatic, revolute from the geometry alone
-            (:data:`GEOMETRY_EVIDENCE`): a front moved out parallel to the front plane is
-            a drawer's; a panel turned out of it about an edge on it, a door's.
+        moved_out: its front lies parallel to the front plane, more than
+            :data:`MOVED_OUT` in front of it (only a drawer does that).
+        turned_out: it is a panel turned out of the front plane about an edge on it
+            (a door).
     """
 
     view: int
@@ -139,7 +167,8 @@ class Reading:
     door_ok: np.ndarray
     closed_door: bool
     depth_x: float
-    evidence: np.ndarray = field(default_factory=lambda: np.ones(3))
+    moved_out: bool = False
+    turned_out: bool = False
 
 
 @dataclass
@@ -199,7 +228,11 @@ class FusedCabinet:
 
 # --- the front plane ------------------------------------------------------------------
 def fit_front(
-    points: np.ndarray, normals: np.ndarray, carcass: np.ndarray, cameras: np.ndarray
+    points: np.ndarray,
+    normals: np.ndarray,
+    carcass: np.ndarray,
+    cameras: np.ndarray,
+    max_depth: float | None = MAX_DEPTH,
 ) -> tuple[np.ndarray, float, np.ndarray]:
     """The cabinet's front: a vertical plane facing the cameras.
 
@@ -211,7 +244,8 @@ def fit_front(
     (in front of it, no carcass), at the back panel seen through open cells (behind it)
     and at thin carcass-looking strips (an open door's edge); the front is the peak with
     the most carcass points on it less twice the carcass points 2 cm or more in front of
-    it (the carcass lies behind its front).
+    it (the carcass lies behind its front), among the peaks with at most ``max_depth``
+    of carcass behind them (None: any).
 
     Args:
         points: (N, 3) world points of the cabinet [m]; normals: (N, 3) their unit
@@ -253,7 +287,15 @@ def fit_front(
     # Carcass on the plane, minus twice the carcass in front of it (2 cm and more).
     ahead = np.cumsum(hist_c[::-1])[::-1]  # carcass points in bin k and beyond
     score = [smooth_c[k] - 2.0 * (ahead[k + 5] if k + 5 < len(ahead) else 0) for k in peaks]
-    k = peaks[int(np.argmax(score))] if peaks else int(np.argmax(smooth))
+    # No carcass is deeper than the generator's 0.45 m: a plane with carcass further
+    # behind it is an open drawer's front.
+    if max_depth is not None and carcass.sum() >= 20:
+        back = float(np.percentile(off[carcass], 2.0))
+        score = [
+            sc if lo + (k + 0.5) * 0.004 - back <= max_depth else -np.inf
+            for k, sc in zip(peaks, score, strict=True)
+        ]
+    k = peaks[int(np.argmax(score))] if peaks and max(score) > -np.inf else int(np.argmax(smooth))
     d = float(lo + (k + 0.5) * 0.004)
     inl = np.abs(off - d) < PLANE_TOL
     d = float(np.median(off[inl]))
@@ -282,8 +324,9 @@ def _run(v: np.ndarray, bin_size: float = 0.01, max_gap: int = 8) -> tuple[float
     return float(inside.min()), float(inside.max())
 
 
-def front_frame(views: Sequence[ViewParts]) -> FrontFrame:
-    """The :class:`FrontFrame` from the cabinet points of every view."""
+def front_frame(views: Sequence[ViewParts], max_depth: float | None = MAX_DEPTH) -> FrontFrame:
+    """The :class:`FrontFrame` from the cabinet points of every view (``max_depth``:
+    :func:`fit_front`'s)."""
     seen = [v for v in views if v.sees_cabinet]
     if not seen:
         raise NoCabinetError(
@@ -294,7 +337,7 @@ def front_frame(views: Sequence[ViewParts]) -> FrontFrame:
     cams = np.stack([v.T_world_camera[:3, 3] for v in seen])
     carcass = np.concatenate([v.cabinet_class == 1 for v in seen])
     normals = np.concatenate([v.cabinet_normals for v in seen])
-    n, d, inl = fit_front(pts, normals, carcass, cams)
+    n, d, inl = fit_front(pts, normals, carcass, cams, max_depth)
     z = np.array([0.0, 0.0, 1.0])
     y = np.cross(z, n)
     R = np.stack([n, y, z], axis=1)
@@ -375,9 +418,8 @@ def read_instance(view: int, inst: Instance, front: FrontFrame) -> Reading:
     tilt = math.acos(min(1.0, abs(float(m[0]))))
     closed = tilt < DOOR_OPEN_TILT
     primary = None
-    evidence = np.ones(3)
-    if closed and depth_x > 0.025:  # moved out, still parallel: only a drawer does that
-        evidence = np.array([GEOMETRY_EVIDENCE, 1.0, GEOMETRY_EVIDENCE])
+    moved_out = closed and depth_x > MOVED_OUT  # still parallel: only a drawer does that
+    turned_out = False
     if not closed:
         ok[:] = False
         side_door = abs(float(m[1])) > abs(float(m[2]))  # turned about a vertical line
@@ -388,8 +430,16 @@ def read_instance(view: int, inst: Instance, front: FrontFrame) -> Reading:
         hinge, free = ends if ends[0][0] <= ends[1][0] else ends[::-1]  # hinge: nearer the front
         w = s_hi - s_lo
         dirn = free - hinge
-        if abs(hinge[0]) < 0.04 and free[0] > 0.05:  # turned out about an edge on the front
-            evidence = np.array([GEOMETRY_EVIDENCE, GEOMETRY_EVIDENCE, 1.0])
+        turned_out = abs(hinge[0]) < 0.04 and free[0] > 0.05  # about an edge on the front
+        u = dirn / max(float(np.linalg.norm(dirn)), 1e-9)
+        # The hinge end hidden (a flap open above shades it): the hinge is where the
+        # panel's plane meets the front plane, on the seen (outer) face of a side door
+        # or a lifted top flap.
+        back = float(hinge[0]) / u[0] if u[0] > 0.1 else math.inf
+        hidden = hinge[0] > HIDDEN_HINGE and (side_door or u[2] < 0) and back < MAX_HIDDEN
+        if hidden:
+            hinge = hinge - back * u
+            w += back
         if side_door:
             theta = math.atan2(max(dirn[0], 0.0), abs(dirn[1]))
             first, second = (0, 1) if dirn[1] > 0 else (1, 0)  # left if the free edge is to +y
@@ -406,7 +456,9 @@ def read_instance(view: int, inst: Instance, front: FrontFrame) -> Reading:
             side = 2 if dirn[2] < 0 else 3  # top hinge if the free edge hangs below
             # A top hinge sits on the panel's back face: the seen edge rose by about
             # FRONT_THICKNESS * sin(theta) as it turned.
-            z_h = float(hinge[2]) - (FRONT_THICKNESS * math.sin(theta) if side == 2 else 0.0)
+            # (On the front plane, extrapolated: FRONT_THICKNESS * tan(theta / 2).)
+            rise = math.tan(0.5 * theta) if hidden else math.sin(theta)
+            z_h = float(hinge[2]) - (FRONT_THICKNESS * rise if side == 2 else 0.0)
             ylo2, yhi2 = _extent(P[:, 1])
             span = (z_h - w - g, z_h + g) if side == 2 else (z_h - g, z_h + w + g)
             ok[side] = True
@@ -417,7 +469,7 @@ def read_instance(view: int, inst: Instance, front: FrontFrame) -> Reading:
     rect = door_rect[primary].copy() if as_door else face_rect
     return Reading(
         view, inst, rect, face_rect, max(depth_x, 0.0), door_rect, door_q, ok, closed, depth_x,
-        evidence,
+        bool(moved_out), bool(turned_out),
     )  # fmt: skip
 
 
@@ -462,19 +514,22 @@ def _handle_cue(handle: np.ndarray, rect: np.ndarray) -> np.ndarray:
     return e / e.sum()
 
 
-def _handle_class_cue(handle: np.ndarray, rect: np.ndarray) -> np.ndarray:
-    """Joint-type likelihoods (3,) from a closed front's handle: fixed fronts have none; a
-    drawer's is centred; a door's is near its free edge (at least half-way from the
-    centre to the edge, as the generator and most furniture place them)."""
-    u = (handle[1] - 0.5 * (rect[0] + rect[1])) / max(0.5 * (rect[1] - rect[0]), 1e-3)
-    v = (handle[2] - 0.5 * (rect[2] + rect[3])) / max(0.5 * (rect[3] - rect[2]), 1e-3)
-    off = max(abs(u), abs(v))
-    g = GEOMETRY_EVIDENCE
-    if off < 0.3:
-        return np.array([g, 1.0, g])
-    if off > 0.45:
-        return np.array([g, g, 1.0])
-    return np.array([g, 1.0, 1.0])
+def _weighted_median(v: np.ndarray, w: np.ndarray) -> float:
+    """The median of values ``v`` (N,) under weights ``w`` (N,): a fragment seen in
+    one view does not pull a drawer's opening to its own."""
+    order = np.argsort(v, kind="stable")
+    c = np.cumsum(w[order])
+    return float(v[order][np.searchsorted(c, 0.5 * c[-1])])
+
+
+def _existence(group: list[Reading], *visible: int) -> float:
+    """Confidence-weighted share of the views that could see a part that did: per view
+    its most confident reading (pieces of one front count once), over the most views
+    that could see it (``visible``), with a prior of 0.1 in 0.2."""
+    conf: dict[int, float] = {}
+    for r in group:
+        conf[r.view] = max(conf.get(r.view, 0.0), r.instance.part_prob)
+    return float(min((sum(conf.values()) + 0.1) / (max(*visible, len(conf)) + 0.2), 1.0))
 
 
 def _summarise(
@@ -484,8 +539,8 @@ def _summarise(
     wts /= wts.sum()
     rects = np.stack([r.face_rect for r in group])
     rect = np.median(rects, axis=0) if len(group) > 2 else (wts[:, None] * rects).sum(axis=0)
-    cls = (wts[:, None] * np.stack([r.instance.class_prob for r in group])).sum(axis=0)
-    cls = cls * np.prod(np.stack([r.evidence for r in group]), axis=0) + 1e-9
+    # Each view's probabilities already hold its geometric evidence (joint_cues).
+    cls = (wts[:, None] * np.stack([r.instance.class_prob for r in group])).sum(axis=0) + 1e-9
     net = (wts[:, None] * np.stack([r.instance.hinge_prob for r in group])).sum(axis=0)
     # Geometry: an open panel allows only the sides it can be hinged on.
     ok = np.all(np.stack([r.door_ok for r in group]), axis=0)
@@ -499,8 +554,7 @@ def _summarise(
         if rows:
             door_q[k] = float(np.median([r.door_q[k] for r in rows]))
             door_rect[k] = np.median(np.stack([r.door_rect[k] for r in rows]), axis=0)
-    conf = sum(r.instance.part_prob for r in group)
-    existence = (conf + 0.1) / (max(visible, len(group)) + 0.2)
+    existence = _existence(group, visible)
     handles = [
         (r.instance.handle, r.instance.handle_score) for r in group if r.instance.handle is not None
     ]
@@ -509,16 +563,15 @@ def _summarise(
     )
     if handle is not None and all(r.closed_door for r in group):
         hinge = hinge * _handle_cue(handle, rect)
-        cls = cls * _handle_class_cue(handle, rect)
     return PartHypothesis(
         rect=rect,
         rect_std=rects.std(axis=0),
         class_prob=cls / cls.sum(),
-        existence=float(min(existence, 1.0)),
+        existence=existence,
         hinge_prob=hinge / hinge.sum(),
         door_rect=door_rect,
         door_q=door_q,
-        q_drawer=float(np.median([r.q_drawer for r in group])),
+        q_drawer=_weighted_median(np.array([r.q_drawer for r in group]), wts),
         q_std=float(np.std([r.q_drawer for r in group])),
         handle=handle,
         handle_score=float(max((s for _, s in handles), default=0.0)),
@@ -534,6 +587,96 @@ def _candidates(r: Reading) -> list[np.ndarray]:
     """The closed-state rectangles a reading may stand for: as seen, as associated, and
     as a door hinged on each side its geometry allows."""
     return [r.rect, r.face_rect, *(r.door_rect[k] for k in range(4) if r.door_ok[k])]
+
+
+def _match(r: Reading, ref: Reading) -> float:
+    """How well reading ``r`` matches a group's reference reading: the best IoU over
+    their pairs of candidate rectangles, or :data:`HINGE_MATCH` for two open panels
+    turned about one hinge line (:func:`_same_hinge`), whose rectangles differ with
+    how much of the panel each view saw."""
+    iou = max(rect_iou(a, b) for a in _candidates(r) for b in _candidates(ref))
+    return max(iou, HINGE_MATCH) if _same_hinge(r, ref) else iou
+
+
+def _same_hinge(a: Reading, b: Reading) -> bool:
+    """Two open panels with a hinge side both allow, their hinge lines within
+    :data:`HINGE_TOL` of each other, their openings within :data:`OPENING_TOL`, and
+    overlapping along the hinge by half the shorter one."""
+    if a.closed_door or b.closed_door:
+        return False
+    for k in range(4):
+        if not (a.door_ok[k] and b.door_ok[k]):
+            continue
+        edge = (0, 1, 3, 2)[k]  # the rectangle's coordinate on the hinge line
+        ra, rb = a.door_rect[k], b.door_rect[k]
+        lo, hi = (2, 3) if k < 2 else (0, 1)  # along the hinge
+        overlap = min(ra[hi], rb[hi]) - max(ra[lo], rb[lo])
+        shorter = min(ra[hi] - ra[lo], rb[hi] - rb[lo])
+        if (
+            abs(ra[edge] - rb[edge]) < HINGE_TOL
+            and abs(a.door_q[k] - b.door_q[k]) < OPENING_TOL
+            and overlap > 0.5 * shorter
+        ):
+            return True
+    return False
+
+
+def _apart(a: np.ndarray, b: np.ndarray) -> bool:
+    """Two closed-state rectangles lie apart by at least :data:`MERGE_GAP` (a divider
+    between two cells), in y or in z."""
+    return max(max(a[0], b[0]) - min(a[1], b[1]), max(a[2], b[2]) - min(a[3], b[3])) >= MERGE_GAP
+
+
+def _associate(readings: list[Reading]) -> tuple[list[list[Reading]], list[int]]:
+    """Readings (smallest first) into groups of one part each, and per group the views
+    in which it was part of a merged region (module docstring, step 3).
+
+    A reading whose best group already holds a reading of its view takes that place if
+    it matches the group's reference (its largest reading) better by
+    :data:`SWAP_MARGIN`; the reading it displaces is placed again (at most
+    :data:`MAX_EVICTIONS` times). Small fragments (a strip of an open cell) otherwise
+    keep the view's slot of a part whose whole front that view saw, and the front
+    starts a second hypothesis of the same part."""
+    queue = deque(readings)
+    groups: list[list[Reading]] = []
+    refs: list[Reading] = []  # each group's largest reading
+    merged: list[int] = []
+    evicted: Counter[int] = Counter()
+    while queue:
+        r = queue.popleft()
+        # A merged region: it covers two or more parts that each fill little of it.
+        covered = [
+            k for k, g in enumerate(refs)
+            if _covered(g.rect, r.rect) > 0.7 and rect_iou(g.rect, r.rect) < 0.6
+            and min(g.face_rect[1] - g.face_rect[0], g.face_rect[3] - g.face_rect[2]) >= MIN_PART
+        ]  # fmt: skip
+        if any(_apart(refs[i].rect, refs[j].rect) for i in covered for j in covered):
+            for k in covered:
+                merged[k] += 1
+            continue
+        scores = [_match(r, g) for g in refs]
+        placed = False
+        for k in np.argsort(scores, kind="stable")[::-1]:
+            if scores[k] < ASSOC_IOU:
+                break
+            occupant = next((g for g in groups[k] if g.view == r.view), None)
+            if occupant is not None:
+                if evicted[id(occupant)] >= MAX_EVICTIONS or occupant is refs[k]:
+                    continue
+                if scores[k] < _match(occupant, refs[k]) + SWAP_MARGIN:
+                    continue
+                groups[k] = [g for g in groups[k] if g is not occupant]
+                evicted[id(occupant)] += 1
+                queue.appendleft(occupant)
+            groups[k].append(r)
+            refs[k] = max(groups[k], key=lambda g: (g.instance.pixels, -g.view))
+            placed = True
+            break
+        if not placed:
+            groups.append([r])
+            refs.append(r)
+            merged.append(0)
+    return groups, merged
 
 
 def fuse(views: Sequence[ViewParts]) -> FusedCabinet:
@@ -556,33 +699,7 @@ def fuse(views: Sequence[ViewParts]) -> FusedCabinet:
     )
     readings = [r for r in readings if _covered(r.rect, box) > 0.8]
     readings.sort(key=lambda r: (r.instance.pixels, r.view))
-    groups: list[list[Reading]] = []
-    refs: list[Reading] = []  # each group's largest reading
-    merged: list[int] = []
-    for r in readings:
-        cands = _candidates(r)
-        # A merged region: it covers two or more parts that each fill little of it.
-        covered = [
-            k for k, g in enumerate(refs)
-            if _covered(g.rect, r.rect) > 0.7 and rect_iou(g.rect, r.rect) < 0.6
-        ]  # fmt: skip
-        if len(covered) >= 2:
-            for k in covered:
-                merged[k] += 1
-            continue
-        scores = [max(rect_iou(a, b) for a in cands for b in _candidates(g)) for g in refs]
-        free = [
-            k for k in np.argsort(scores)[::-1]
-            if scores[k] >= ASSOC_IOU and all(g.view != r.view for g in groups[k])
-        ]  # fmt: skip
-        if free:
-            groups[free[0]].append(r)
-            if r.instance.pixels > refs[free[0]].instance.pixels:
-                refs[free[0]] = r
-        else:
-            groups.append([r])
-            refs.append(r)
-            merged.append(0)
+    groups, merged = _associate(readings)
     parts = []
     for grp, mg in zip(groups, merged, strict=True):
         rect = np.median(np.stack([g.rect for g in grp]), axis=0)
@@ -596,9 +713,10 @@ def fuse(views: Sequence[ViewParts]) -> FusedCabinet:
 def _join_open_fragments(parts: list[PartHypothesis]) -> list[PartHypothesis]:
     """Join drawer hypotheses that are pieces of one open drawer front: both pulled out
     (more than 2 cm) by the same amount (within 1 cm), side by side or one above the
-    other within 8 cm, spanning the same rows or columns. Two real drawers are never
-    pulled out by the same centimetre by chance; at the front plane a divider would
-    separate them."""
+    other within 8 cm, spanning the same rows or columns. Two real drawers are rarely
+    pulled out by the same centimetre; when they are, a divider separates them, so two
+    hypotheses seen in three views or more join only if they lie closer than
+    :data:`MERGE_GAP`."""
     out = list(parts)
     joined = True
     while joined:
@@ -615,22 +733,26 @@ def _join_open_fragments(parts: list[PartHypothesis]) -> list[PartHypothesis]:
                 gap_z = max(ra[2], rb[2]) - min(ra[3], rb[3])
                 span_z = min(ra[3], rb[3]) - max(ra[2], rb[2])
                 span_y = min(ra[1], rb[1]) - max(ra[0], rb[0])
-                side = gap_y < 0.08 and span_z > 0.8 * min(ra[3] - ra[2], rb[3] - rb[2])
-                stack = gap_z < 0.08 and span_y > 0.8 * min(ra[1] - ra[0], rb[1] - rb[0])
+                # Two fronts each seen whole from most views, a divider apart: two drawers.
+                reach = MERGE_GAP if min(a.views, b.views) >= 3 else 0.08
+                side = gap_y < reach and span_z > 0.8 * min(ra[3] - ra[2], rb[3] - rb[2])
+                stack = gap_z < reach and span_y > 0.8 * min(ra[1] - ra[0], rb[1] - rb[0])
                 if not (side or stack):
                     continue
                 rect = np.array([min(ra[0], rb[0]), max(ra[1], rb[1]),
                                  min(ra[2], rb[2]), max(ra[3], rb[3])])  # fmt: skip
                 big, small = (a, b) if a.views * a.existence >= b.views * b.existence else (b, a)
+                readings = big.readings + small.readings
                 out[i] = dataclasses.replace(
                     big,
                     rect=rect,
                     door_rect=np.tile(rect, (4, 1)),
-                    existence=max(a.existence, b.existence),
-                    views=max(a.views, b.views),
+                    existence=max(a.existence, b.existence, _existence(readings, a.visible,
+                                                                       b.visible)),
+                    views=len({r.view for r in readings}),
                     handle=big.handle if big.handle is not None else small.handle,
-                    readings=big.readings + small.readings,
-                )
+                    readings=readings,
+                )  # fmt: skip
                 del out[j]
                 joined = True
                 break

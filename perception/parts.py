@@ -20,6 +20,7 @@ fronts of one class are split by their centres (the issue of merged drawer stack
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -42,6 +43,7 @@ from perception.articulation_net import (
 )
 from perception.errors import BadInputError
 from perception.inputs import View
+from perception.joint_cues import apply_joint_cues
 
 #: The shipped weights.
 DEFAULT_WEIGHTS = (
@@ -66,8 +68,9 @@ class Instance:
     Attributes:
         mask: (h, w) bool at the network's resolution.
         points: (N, 3) world points of its valid pixels [m].
-        class_prob: (3,) mean probability of fixed, prismatic, revolute over its pixels,
-            renormalised over those three classes.
+        class_prob: (3,) probability of fixed, prismatic, revolute: the network's
+            (``net_class_prob``) times this view's geometric evidence
+            (:mod:`perception.joint_cues`).
         part_prob: mean probability that its pixels are a part at all (not carcass or
             background), the instance's confidence.
         hinge_prob: (4,) mean hinge-side probabilities (left, right, top, bottom).
@@ -75,6 +78,8 @@ class Instance:
             pixel of it exceeds probability 0.5.
         handle_score: that highest pull-affordance probability.
         pull: (N,) pull-affordance probability of each of ``points``.
+        net_class_prob: (3,) the network's mean probability of fixed, prismatic,
+            revolute over its pixels, renormalised over those three classes.
     """
 
     mask: np.ndarray
@@ -85,6 +90,7 @@ class Instance:
     handle: np.ndarray | None
     handle_score: float
     pull: np.ndarray
+    net_class_prob: np.ndarray
 
     @property
     def pixels(self) -> int:
@@ -104,7 +110,8 @@ class ViewParts:
             neighbouring pixels' points; zero where a neighbour is a depth edge).
         instances: the parts seen.
         handle_prob: (h, w) pull-affordance probability.
-        points: (h, w, 3) world points of every pixel [m]; valid: (h, w) bool.
+        points: (h, w, 3) world points of every pixel [m]; valid: (h, w) bool;
+            normals: (h, w, 3) their unit surface normals (zero where unknown).
         seconds: wall time of the network and the extraction [s].
     """
 
@@ -118,6 +125,7 @@ class ViewParts:
     handle_prob: np.ndarray
     points: np.ndarray
     valid: np.ndarray
+    normals: np.ndarray
     seconds: float
 
     @property
@@ -220,7 +228,8 @@ class Perceiver:
 
 
 def extract(view: View, out: np.ndarray, stride: int = 2, t0: float | None = None) -> ViewParts:
-    """Instances and world points of one view from a network output (N_OUT, h, w)
+    """Instances and world points of one view from a network output (N_OUT, h, w),
+    with this view's joint-type cues (:func:`perception.joint_cues.apply_joint_cues`)
     (``t0``: the :func:`time.perf_counter` the view's processing started at)."""
     t0 = time.perf_counter() if t0 is None else t0
     s = stride
@@ -252,18 +261,23 @@ def extract(view: View, out: np.ndarray, stride: int = 2, t0: float | None = Non
                 handle=pts[best] if score > 0.5 else None,
                 handle_score=score,
                 pull=handle[mv],
+                net_class_prob=cp / cp.sum(),
             )
         )
-    return ViewParts(
+    normals = surface_normals(pts, T[:3, 3])
+    vp = ViewParts(
         T_world_camera=T,
         fovy=view.fovy,
         shape=label.shape,
         cabinet_points=pts[cab],
         cabinet_class=label[cab],
-        cabinet_normals=surface_normals(pts, T[:3, 3])[cab],
+        cabinet_normals=normals[cab],
         instances=instances,
         handle_prob=handle,
         points=pts,
         valid=valid,
-        seconds=time.perf_counter() - t0,
+        normals=normals,
+        seconds=0.0,
     )
+    vp = apply_joint_cues(vp)
+    return dataclasses.replace(vp, seconds=time.perf_counter() - t0)

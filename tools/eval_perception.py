@@ -32,7 +32,8 @@ region:
   time, torch on 1 thread; rendering is not counted.
 
 With ``--json``, standard output is one JSON object with exactly these keys; the failure
-causes (per part) go to standard error.
+causes (per part after fusion; ``per view:`` the found parts whose type was wrong, by
+what they are) go to standard error.
 
 Cabinets seen in training have seeds >= 100,000; tune on a range you do not report.
 """
@@ -132,6 +133,14 @@ def true_parts(seed: int, T_world_cab: np.ndarray, fused: FusedCabinet | None) -
     return out
 
 
+def _front_kind(part, q: float) -> str:
+    """A part as a failure cause names it: ``closed drawer with a bar`` ..."""
+    kind = "flap" if part.hinge in ("top", "bottom") else part.kind
+    state = "open" if q > 0.02 else "closed"
+    handle = {"none": "without a handle", "bar": "with a bar", "knob": "with a knob"}[part.handle]
+    return f"{state} {kind} {handle}"
+
+
 def hypothesis_joint(h, front) -> tuple[str, np.ndarray, np.ndarray, np.ndarray]:
     """The point estimate of a fused hypothesis: (type, rect, world axis, world origin)."""
     t = h.joint_type
@@ -165,6 +174,7 @@ def evaluate_cabinet(
 ) -> dict:
     """Every figure of one cabinet (module docstring)."""
     lvs = render_episode(seed, args.views)
+    spec = generate_cabinet(seed)
     T_world_cab = lvs[0].T_world_camera @ lvs[0].T_camera_cabinet
     rec = Counter()
     seconds = []
@@ -195,7 +205,11 @@ def evaluate_cabinet(
                     best, iou = inst, inter / u
             if best is not None and iou >= 0.5:
                 rec["view_found"] += 1
-                rec["view_type_ok"] += int(np.argmax(best.class_prob)) == int(jt)
+                right = int(np.argmax(best.class_prob)) == int(jt)
+                rec["view_type_ok"] += right
+                if not right:
+                    causes[f"per view: {_front_kind(spec.parts[k], lv.q[k])} typed "
+                           f"{TYPES[int(np.argmax(best.class_prob))]}"] += 1  # fmt: skip
     t0 = time.perf_counter()
     try:
         fused = fuse(vparts)

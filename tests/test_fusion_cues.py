@@ -1,0 +1,127 @@
+"""Per-view joint-type cues, the association of readings across views, open panels with
+hidden hinges, and grasps on a handle's middle (issue 10, follow-up). Synthetic
+instances only: no rendering, no network."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from perception.affordance import BAR_MIDDLE, sample_grasps
+from perception.fusion import (
+    FRONT_GAP,
+    FrontFrame,
+    FusedCabinet,
+    PartHypothesis,
+    Reading,
+    _apart,
+    _associate,
+    _weighted_median,
+    read_instance,
+)
+from perception.joint_cues import CUE_EVIDENCE, HandleSeen, closed_front_evidence
+from perception.parts import Instance
+
+FRONT = FrontFrame(np.eye(4), 0.8, 0.8, 0.4, True, 1000)
+
+
+def _instance(points: np.ndarray, pixels: int, pull: np.ndarray | None = None) -> Instance:
+    mask = np.zeros(pixels, dtype=bool)
+    mask[:] = True
+    return Instance(
+        mask=mask,
+        points=points,
+        class_prob=np.array([0.1, 0.2, 0.7]),
+        part_prob=0.9,
+        hinge_prob=np.full(4, 0.25),
+        handle=None,
+        handle_score=0.0,
+        pull=np.zeros(len(points)) if pull is None else pull,
+        net_class_prob=np.array([0.1, 0.2, 0.7]),
+    )
+
+
+def _reading(view: int, rect, pixels: int) -> Reading:
+    rect = np.asarray(rect, dtype=float)
+    return Reading(
+        view, _instance(np.zeros((1, 3)), pixels), rect, rect, 0.0, np.tile(rect, (4, 1)),
+        np.zeros(4), np.ones(4, dtype=bool), True, 0.0,
+    )  # fmt: skip
+
+
+def test_closed_front_handle_cues() -> None:
+    g = CUE_EVIDENCE
+    centred = closed_front_evidence(HandleSeen(0.05, 0.1, 0.15, 0.01, 30), True)
+    assert np.allclose(centred, [g, 1.0, g])  # a drawer's handle
+    off = closed_front_evidence(HandleSeen(0.7, 0.0, 0.01, 0.15, 30), True)
+    assert off[2] == 1.0 and off[1] <= g * g  # a side door's upright bar, by its free edge
+    bare = closed_front_evidence(None, True)
+    assert bare[0] > bare[1] == bare[2]  # handles elsewhere: a bare front is a panel
+    assert closed_front_evidence(None, False)[0] == g  # no handles anywhere: no panel cue
+
+
+def test_weighted_median_and_dividers() -> None:
+    assert _weighted_median(np.array([0.0, 0.13, 0.14]), np.array([0.1, 0.5, 0.4])) == 0.13
+    # Two cells with a divider between them lie apart; two pieces of one front do not.
+    assert _apart(np.array([-0.3, -0.01, 0, 0.2]), np.array([0.01, 0.3, 0, 0.2]))
+    assert not _apart(np.array([-0.3, 0.002, 0, 0.2]), np.array([0.0, 0.3, 0, 0.2]))
+
+
+def test_a_front_displaces_a_fragment_of_its_view() -> None:
+    """A strip seen in view 0 joined the group first (smallest first); view 0's whole
+    front then takes its place, so the part is one hypothesis seen in every view."""
+    front = [-0.2, 0.2, 0.3, 0.5]
+    strip = _reading(0, [-0.2, 0.2, 0.3, 0.4], 50)  # IoU 0.5 with the front
+    one, two = _reading(1, front, 800), _reading(2, front, 1000)
+    mine = _reading(0, front, 900)
+    groups, merged = _associate([strip, one, mine, two])  # smallest first
+    big = max(groups, key=len)
+    assert sorted(r.view for r in big) == [0, 1, 2] and any(r is mine for r in big)
+    assert [r for g in groups for r in g if r is strip]  # the strip is kept, elsewhere
+    assert merged == [0] * len(groups)
+
+
+def test_hidden_hinge_is_extrapolated_to_the_front_plane() -> None:
+    """A left-hinged door open by 60 deg whose hinge half is shaded: the hinge is where
+    the panel's plane meets the front plane, not at the seen end."""
+    theta, width, y_hinge = math.radians(60.0), 0.3, -0.1
+    e = np.array([math.sin(theta), math.cos(theta), 0.0])  # hinge -> free edge
+    s, z = np.meshgrid(np.linspace(0.15, width, 40), np.linspace(0.2, 0.5, 30))
+    pts = np.array([0.0, y_hinge, 0.0]) + s.reshape(-1, 1) * e
+    pts[:, 2] = z.ravel()
+    r = read_instance(0, _instance(pts, len(pts)), FRONT)
+    assert not r.closed_door and r.door_ok[0]
+    assert abs(r.door_rect[0][0] + FRONT_GAP - y_hinge) < 0.01
+    assert abs(r.door_rect[0][1] - r.door_rect[0][0] - width - 2 * FRONT_GAP) < 0.02
+    assert abs(r.door_q[0] - theta) < 0.02
+
+
+def test_affordance_grasps_take_a_bar_near_its_middle() -> None:
+    """Grasps drawn on a 20 cm bar lie within BAR_MIDDLE of its middle; uniform ones
+    spread over the front."""
+    y, z = np.meshgrid(np.linspace(-0.2, 0.2, 41), np.linspace(0.2, 0.4, 21))
+    face = np.stack([np.zeros(y.size), y.ravel(), z.ravel()], axis=1)
+    bar_y = np.linspace(-0.1, 0.1, 40)
+    bar = np.stack([np.full(40, 0.035), bar_y, np.full(40, 0.3)], axis=1)
+    pts = np.concatenate([face, bar])
+    pull = np.r_[np.zeros(len(face)), np.full(len(bar), 0.9)]
+    inst = _instance(pts, len(pts), pull)
+    rect = np.array([-0.2, 0.2, 0.2, 0.4])
+    r = Reading(0, inst, rect, rect, 0.0, np.tile(rect, (4, 1)), np.zeros(4),
+                np.ones(4, dtype=bool), True, 0.0)  # fmt: skip
+    h = PartHypothesis(
+        rect=rect, rect_std=np.zeros(4), class_prob=np.array([0.0, 1.0, 0.0]), existence=1.0,
+        hinge_prob=np.full(4, 0.25), door_rect=np.tile(rect, (4, 1)), door_q=np.zeros(4),
+        q_drawer=0.0, q_std=0.0, handle=None, handle_score=0.9, views=1, visible=1, merged=0,
+        shelf=False, readings=[r],
+    )  # fmt: skip
+    fused = FusedCabinet(FRONT, [h], 0.0)
+    T, p = sample_grasps(fused, 0, 50, np.random.default_rng(0))
+    assert (p > 0.5).mean() > 0.9
+    on = p > 0.5
+    assert np.all(np.abs(T[on, 1, 3]) <= BAR_MIDDLE + 1e-6)
+    assert np.allclose(T[on, 2, 3], 0.3)
+    assert np.allclose(T[:, :3, 0], [[-1.0, 0.0, 0.0]])  # into the front
+    U, _ = sample_grasps(fused, 0, 50, np.random.default_rng(0), sharpness=0.0)
+    assert np.abs(U[:, 1, 3]).max() > 0.1
