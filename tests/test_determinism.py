@@ -40,9 +40,14 @@ def test_different_seeds_differ() -> None:
 NEW_OPTIONS = [
     ("pomcp", {"exploration": "normalized", "reuse_tree": True}),
     ("pomcpow", {"exploration": "normalized"}),
-    ("strug", {"exploration": "normalized"}),
+    ("strug", {"exploration": "normalized", "horizon": "episode"}),
 ]
-HEURISTIC = {"exploration": "normalized", "reuse_tree": True, "rollout": "heuristic"}
+HEURISTIC = {
+    "exploration": "normalized",
+    "reuse_tree": True,
+    "rollout": "heuristic",
+    "horizon": "episode",
+}
 
 
 @pytest.mark.parametrize(

@@ -180,3 +180,21 @@ def test_episodes_with_reuse_are_bounded_and_reuse_happens() -> None:
     result = run_episode(pomdp, SpyConfig(), 5, n_particles=300)  # type: ignore[arg-type]
     assert len(result.steps) == 10 and seen[0] == 0
     assert sum(v > 0 for v in seen[1:]) >= 7  # nearly every later decision reused a subtree
+
+
+def test_episode_horizon_searches_only_the_steps_left() -> None:
+    pomdp = make_domain("tigerclassic")
+    config = POMCPConfig(sims=3000, horizon="episode")
+    assert config.search_depth(pomdp, 0) == 10 and config.search_depth(pomdp, 9) == 1
+    assert POMCPConfig().search_depth(pomdp, 9) == 10  # receding: always depth steps
+    planner = config.planner(pomdp)
+    for _ in range(9):
+        planner.observe(LISTEN, 0)
+    # The last step at P(left) = 0.85: a door is worth 0.85 * 10 - 0.15 * 100 = -6.5 there,
+    # less than the -1 of listening, although listening can no longer be used.
+    likely_left = ParticleBelief.from_states([0] * 170 + [1] * 30)
+    action, info = planner.act(likely_left, np.random.default_rng(0))
+    assert action == LISTEN
+    assert info.q[0] == pytest.approx(-1.0) and info.q[2] == pytest.approx(-6.5, abs=1.5)
+    with pytest.raises(ConfigError, match="horizon must be one of receding, episode"):
+        make_solver("strug", {"horizon": "forever"})

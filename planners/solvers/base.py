@@ -110,6 +110,10 @@ class SolverConfig:
         return dataclasses.replace(self, **overrides)
 
 
+#: Valid values of ``TreeSearchConfig.horizon``.
+HORIZONS = ("receding", "episode")
+
+
 @dataclass(frozen=True)
 class TreeSearchConfig(SolverConfig):
     """Fields shared by the tree-search solvers.
@@ -127,6 +131,13 @@ class TreeSearchConfig(SolverConfig):
             plus ``c_normalized sqrt(ln N / n)``: no guess of the return spread).
         c_normalized: the dimensionless exploration constant of ``"normalized"``
             (default 1.0); ignored by ``"fixed"``.
+        horizon: ``"receding"`` (default, the published algorithms: every decision
+            searches ``depth`` steps ahead) or ``"episode"`` (the search stops where the
+            episode does: ``min(depth, max_steps - t)`` steps at the planner's decision
+            ``t``, counting the real steps the runner reported with ``observe``; a
+            planner then serves one episode). On the classic Tiger the best
+            receding-horizon policy is worth 6.11, the finite-horizon optimum 6.69: near
+            the end, listening before a door stops paying.
     """
 
     depth: int | None = None
@@ -134,6 +145,7 @@ class TreeSearchConfig(SolverConfig):
     discount: float | None = None
     exploration: str = "fixed"
     c_normalized: float = 1.0
+    horizon: str = "receding"
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -144,6 +156,8 @@ class TreeSearchConfig(SolverConfig):
         if self.discount is not None:
             check_positive_float("discount", self.discount, upper=1.0)
         check_exploration(self.exploration, self.c_normalized)
+        if self.horizon not in HORIZONS:
+            raise ConfigError(f"horizon must be one of {', '.join(HORIZONS)}, got {self.horizon!r}")
 
     @property
     def normalized(self) -> bool:
@@ -163,6 +177,13 @@ class TreeSearchConfig(SolverConfig):
             c = self.c if self.c is not None else float(pomdp.max_abs_reward)
         gamma = self.discount if self.discount is not None else float(pomdp.discount)
         return depth, c, gamma
+
+    def search_depth(self, pomdp: Any, steps_taken: int) -> int:
+        """The depth of the decision after ``steps_taken`` real steps (see ``horizon``)."""
+        depth = self.depth if self.depth is not None else int(pomdp.max_steps)
+        if self.horizon == "episode":
+            depth = max(1, min(depth, int(pomdp.max_steps) - steps_taken))
+        return depth
 
 
 class Budget:

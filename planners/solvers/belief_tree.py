@@ -93,6 +93,7 @@ class BeliefTreeConfig(TreeSearchConfig):
             ``"plan"``.
         exploration: ``"fixed"`` (default) or ``"normalized"`` UCB (see
             :class:`TreeSearchConfig`); ``c_normalized`` its constant (default 1.0).
+        horizon: ``"receding"`` (default) or ``"episode"`` (see :class:`TreeSearchConfig`).
     """
 
     particles: int = 32
@@ -118,6 +119,16 @@ class BeliefTreeConfig(TreeSearchConfig):
         check_widening(self.widening, self.k_action, self.alpha_action)
         check_positive_float("k_obs", self.k_obs)
         check_positive_float("alpha_obs", self.alpha_obs, allow_zero=True, upper=1.0)
+
+
+class EpisodeSteps:
+    """The real steps of the episode a belief-tree planner serves (``horizon="episode"``)."""
+
+    steps_taken: int = 0
+
+    def observe(self, action: Hashable, observation: Any) -> None:
+        """Count one real step (the runner calls this after every step)."""
+        self.steps_taken += 1
 
 
 def root_particles(
@@ -199,6 +210,7 @@ def belief_tree_search(
     reward_weight: float = 1.0,
     c: float | None = None,
     terminal_bonus: Callable[[float], float] | None = None,
+    steps_taken: int = 0,
 ) -> TreeResult:
     """Search from the belief ``(root_states, root_weights)``.
 
@@ -216,9 +228,11 @@ def belief_tree_search(
             domain's largest |reward|); normalised exploration uses ``c_normalized``.
         terminal_bonus: bonus of a transition that ends the episode, as a function of
             the parent's value (default: none).
+        steps_taken: real steps of the episode so far (``horizon="episode"``).
     """
     budget = Budget(config.sims, config.time_limit)
-    depth, c_default, gamma = config.resolved(pomdp)
+    _, c_default, gamma = config.resolved(pomdp)
+    depth = config.search_depth(pomdp, steps_taken)
     c = c_default if c is None or config.normalized else c
     space = pomdp.action_space()
     widening = resolve_widening(config.widening, space, "hpw")

@@ -53,6 +53,7 @@ class POMCPConfig(TreeSearchConfig):
         discount: search discount (default: the domain's).
         exploration: ``"fixed"`` (default) or ``"normalized"`` UCB (see
             :class:`TreeSearchConfig`); ``c_normalized`` its constant (default 1.0).
+        horizon: ``"receding"`` (default) or ``"episode"`` (see :class:`TreeSearchConfig`).
         obs_bin: width of the observation grid on continuous-observation domains, in
             the observation's units (default 1.0); ignored for discrete observations.
         rollout: ``"random"`` (default: uniform actions from the discretised set) or
@@ -172,9 +173,11 @@ class POMCPPlanner:
             domain_policy(pomdp)  # a domain without one fails here, not mid-episode
         self._tree: POMCPTree | None = None
         self._executed: tuple[int, Hashable] | None = None
+        self.steps_taken = 0
 
     def observe(self, action: Hashable, observation: Any) -> None:
-        """Record the executed action and the real observation (used by ``reuse_tree``)."""
+        """Record the executed action and the real observation (``reuse_tree``, ``horizon``)."""
+        self.steps_taken += 1
         if self.config.reuse_tree and action in self.actions:
             key = observation if self.obs_key is None else self.obs_key(observation)
             self._executed = (self.actions.index(action), key)
@@ -200,7 +203,7 @@ class POMCPPlanner:
         reused = tree.b_n[0]
         actions = self.actions
         n_actions = len(actions)
-        depth, c, gamma = self.depth, self.c, self.gamma
+        depth, c, gamma = cfg.search_depth(self.pomdp, self.steps_taken), self.c, self.gamma
         normalized = cfg.normalized
         step = self.pomdp.step
         obs_key = self.obs_key

@@ -65,6 +65,7 @@ class POMCPOWConfig(TreeSearchConfig):
             spaces, every action on finite ones), ``"all"``, ``"dpw"`` or ``"hpw"``.
         exploration: ``"fixed"`` (default) or ``"normalized"`` UCB (see
             :class:`TreeSearchConfig`); ``c_normalized`` its constant (default 1.0).
+        horizon: ``"receding"`` (default) or ``"episode"`` (see :class:`TreeSearchConfig`).
         rollout: ``"random"`` (default: uniform actions, from the discretised set when
             every action is a child, else from the whole space) or ``"heuristic"`` (the
             domain's :meth:`rollout_policy`).
@@ -101,13 +102,18 @@ class POMCPOWPlanner:
         self.widening = resolve_widening(config.widening, self.space, "dpw")
         if config.rollout == "heuristic":
             domain_policy(pomdp)  # a domain without one fails here, not mid-episode
+        self.steps_taken = 0
+
+    def observe(self, action: Hashable, observation: Any) -> None:
+        """Count the real steps of the episode (for ``horizon="episode"``)."""
+        self.steps_taken += 1
 
     def act(self, belief: ParticleBelief, rng: np.random.Generator) -> tuple[Hashable, SearchInfo]:
         cfg = self.config
         budget = Budget(cfg.sims, cfg.time_limit)
         step, loglik = self.pomdp.step, self.pomdp.obs_loglik
         space = self.space
-        depth, gamma = self.depth, self.gamma
+        depth, gamma = cfg.search_depth(self.pomdp, self.steps_taken), self.gamma
         k_o, al_o = cfg.k_obs, cfg.alpha_obs
         u = UniformStream(rng)
         exp = math.exp
