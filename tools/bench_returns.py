@@ -17,7 +17,8 @@ Ours (:data:`OURS`): POMCP as ``strug bench --domains tigerclassic --solvers pom
 runs it (``run_episode``: a 1000-particle belief in the runner, depth 10 = the
 domain's ``max_steps``, c = 100 = its largest |reward|), with the options of issue 13
 switched on one at a time and together: ``exploration=normalized``, ``reuse_tree=true``,
-``rollout=heuristic`` (the domain's :class:`ListenUntilSure`).
+``rollout=heuristic`` (the domain's :class:`ListenUntilSure`) and ``horizon=episode``
+(search only the steps left in the 10-step episode).
 
 pomdp_py's (:data:`PEERS`): ``pomdp_py.POUCT`` 1.3.5.1 on its shipped
 ``problems.tiger`` models, planning on the *exact* belief (a ``Histogram`` updated
@@ -87,18 +88,17 @@ BUDGETS: dict[str, tuple[float | None, int | None]] = {
     "1000sims": (None, 1000),
 }
 
-#: Our configurations: POMCP config overrides (the ``--set`` fields).
+#: Our configurations: POMCP config overrides (the ``--set`` fields). ``pomcp`` is the
+#: published algorithm as Table I runs it; the others add issue 13's options.
+_ALL = {"exploration": "normalized", "reuse_tree": True, "rollout": "heuristic"}
 OURS: dict[str, dict[str, Any]] = {
     "pomcp": {},
     "pomcp+normalized": {"exploration": "normalized"},
     "pomcp+reuse": {"reuse_tree": True},
     "pomcp+normalized+reuse": {"exploration": "normalized", "reuse_tree": True},
     "pomcp+heuristic": {"rollout": "heuristic"},
-    "pomcp+normalized+reuse+heuristic": {
-        "exploration": "normalized",
-        "reuse_tree": True,
-        "rollout": "heuristic",
-    },
+    "pomcp+normalized+reuse+heuristic": _ALL,
+    "pomcp+normalized+reuse+heuristic+episode": {**_ALL, "horizon": "episode"},
 }
 
 #: pomdp_py configurations: the rollout policy of its POUCT.
