@@ -292,7 +292,7 @@ def text_report(summary: dict[str, Any], budgets: list[str], header: list[str]) 
         ref = cells.get(REFERENCE)
         lines += [
             f"budget {b}",
-            f"  {'configuration':<34} {'mean ± s.e.':>15} {'n':>4} {'sims/dec':>9} "
+            f"  {'configuration':<42} {'mean ± s.e.':>15} {'n':>4} {'sims/dec':>9} "
             f"{'s/dec':>7} {'vs ' + REFERENCE + ' [s.e.]':>20} {'vs optimum [s.e.]':>18}",
         ]
         for name in [*PEERS, *OURS]:
@@ -306,7 +306,7 @@ def text_report(summary: dict[str, Any], budgets: list[str], header: list[str]) 
             )
             vs_opt = (c["mean"] - optimum) / c["stderr"]
             lines.append(
-                f"  {name:<34} {c['mean']:>7.2f} ± {c['stderr']:<5.2f} {c['n']:>4} "
+                f"  {name:<42} {c['mean']:>7.2f} ± {c['stderr']:<5.2f} {c['n']:>4} "
                 f"{c['sims']:>9.0f} {c['seconds']:>7.4f} {vs_ref:>+20.1f} {vs_opt:>+18.1f}"
             )
         lines.append("")
@@ -345,7 +345,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     settings = {
         "ours": {k: OURS[k] for k in args.configs if k in OURS},
         "peers": {k: PEERS[k] for k in args.configs if k in PEERS},
-        "budgets": {b: BUDGETS[b] for b in args.budgets},
+        "budgets": {b: list(BUDGETS[b]) for b in args.budgets},
         "pomdp_py": metadata.version("pomdp-py"),
     }
     records = _prepare(args.out, settings, args.resume)

@@ -6,7 +6,7 @@ A solver is a frozen dataclass of hyper-parameters, validated in ``__post_init__
 real step that did not end the episode, calls its ``observe(action, observation)``
 when it has one. By default planners keep no state between calls (no tree reuse),
 so the same belief and generator state always give the same action when the budget
-is a number of simulations; with ``reuse_tree`` (POMCP, POMCPOW) the decision also
+is a number of simulations; with ``reuse_tree`` (POMCP) the decision also
 depends on the earlier ones of the episode, still bit for bit per seed. A wall-time
 budget (``time_limit``) trades that determinism for a fixed decision time.
 """

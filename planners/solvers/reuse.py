@@ -1,11 +1,11 @@
 """Tree reuse between decisions: what is kept, and when it is dropped.
 
-With ``reuse_tree=True`` (POMCP and POMCPOW; default False, the published algorithms
-as Table I runs them) a planner keeps its tree after ``act``. The runner then reports
-the executed action and the real observation with ``planner.observe(a, o)``, and the
-next ``act`` starts from the subtree under that (action, observation), the way
-POMCP (Silver & Veness 2010) and pomdp_py's POUCT carry their search forward: its
-visit counts and values count as prior simulations and the new budget adds to them.
+With ``reuse_tree=True`` (POMCP; default False, the published algorithm as Table I
+runs it) a planner keeps its tree after ``act``. The runner then reports the executed
+action and the real observation with ``planner.observe(a, o)``, and the next ``act``
+starts from the subtree under that (action, observation), the way POMCP (Silver &
+Veness 2010) and pomdp_py's POUCT carry their search forward: its visit counts and
+values count as prior simulations and the new budget adds to them.
 
 *Particles.* POMCP would take the new root's belief from the states its simulations
 left in that node, and reinvigorate it with fresh particles when too few arrived.
@@ -16,13 +16,17 @@ were gathered from the states that reached the node in the earlier search (recor
 during that search); when those disagree with the runner's belief by more than
 ``reuse_tolerance`` in :func:`particle_disagreement`, the statistics describe another
 belief and the subtree is dropped: the search starts fresh. The subtree is also
-dropped when the tree never simulated the real (action, observation), and a
-continuous observation never matches a child exactly, so with continuous observations
-POMCPOW always starts fresh (POMCP's observation bins do let histories repeat).
+dropped when the tree never simulated the real (action, observation); on continuous
+domains POMCP's observation bins (``obs_bin``) let the real observation find its child.
 
 Kept subtrees are copied into fresh arrays (nodes renumbered breadth-first) at the
 start of the next ``act``, inside its time budget, so a reused tree holds only the
 nodes still reachable.
+
+Not offered by the other solvers: POMCPOW's observation children are the sampled
+observation values themselves, which a continuous real observation never equals, and
+every belief-tree node holds the decision's M root particles reweighted (STRUG's
+compatibility matrix is built over them), which the runner's next belief resamples.
 """
 
 from __future__ import annotations
