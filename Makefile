@@ -7,7 +7,7 @@ STAMP := $(VENV)/.installed
 APT_PACKAGES := libegl1 libegl-mesa0 libgl1-mesa-dri libosmesa6
 export MUJOCO_GL ?= egl
 
-.PHONY: setup demo test test-all bench lint format clean
+.PHONY: setup demo test test-all bench bench-returns lint format clean
 
 setup: $(STAMP)
 
@@ -36,6 +36,10 @@ test-all: setup
 bench: setup
 	$(PY) -m pip install -q "pomdp-py==1.3.5.1"
 	$(PY) tools/bench_tree_search.py
+
+bench-returns: setup
+	$(PY) -m pip install -q "pomdp-py==1.3.5.1"
+	$(PY) tools/bench_returns.py
 
 lint: setup
 	$(VENV)/bin/ruff check . && $(VENV)/bin/ruff format --check .

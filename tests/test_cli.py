@@ -60,3 +60,18 @@ def test_run_writes_a_rerun_recording(tmp_path, capfd) -> None:
         assert out.stat().st_size > 1000
     err = capfd.readouterr().err  # rerun logs from native code: capture the file descriptor
     assert "WARN" not in err  # entity paths are valid
+
+
+def test_bench_accepts_the_search_options(tmp_path, capsys) -> None:
+    """The --set overrides that tools/bench_returns.py prints as its best configuration."""
+    argv = ["bench", "--domains", "tigerclassic", "--solvers", "pomcp", "--time", "0.005",
+            "--seeds", "2", "--out", str(tmp_path), "--json", "--no-progress", "--workers", "1",
+            "--set", "exploration=normalized", "--set", "reuse_tree=true",
+            "--set", "rollout=heuristic", "--set", "horizon=episode", "--set", "c_normalized=1.5",
+            "--set", "reuse_tolerance=0.3"]  # fmt: skip
+    assert main(argv) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["tigerclassic"]["pomcp"]["n"] == 2
+    settings = json.loads((tmp_path / "run.json").read_text())
+    assert settings["overrides"]["reuse_tree"] is True
+    assert settings["overrides"]["exploration"] == "normalized"

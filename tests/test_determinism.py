@@ -35,3 +35,31 @@ def test_different_seeds_differ() -> None:
     config = make_solver("pomcpow", {"sims": 100})
     runs = {repr(_trace(run_episode(pomdp, config, s, n_particles=100))) for s in range(4)}
     assert len(runs) > 1
+
+
+NEW_OPTIONS = [
+    ("pomcp", {"exploration": "normalized", "reuse_tree": True}),
+    ("pomcpow", {"exploration": "normalized"}),
+    ("strug", {"exploration": "normalized", "horizon": "episode"}),
+]
+HEURISTIC = {
+    "exploration": "normalized",
+    "reuse_tree": True,
+    "rollout": "heuristic",
+    "horizon": "episode",
+}
+
+
+@pytest.mark.parametrize(
+    ("domain", "solver", "options"),
+    [(d, s, o) for d in ("tigerclassic", "extendedtiger", "lightdark1d") for s, o in NEW_OPTIONS]
+    + [(d, "pomcp", HEURISTIC) for d in ("tigerclassic", "extendedtiger")],
+)
+def test_same_seed_same_episode_with_the_new_options(domain: str, solver: str, options) -> None:
+    """Tree reuse and normalised exploration keep episodes a function of the seed."""
+    config = make_solver(solver, {"sims": 150, **options})
+    a = run_episode(make_domain(domain), config, 13, n_particles=200)
+    b = run_episode(make_domain(domain), config, 13, n_particles=200)
+    assert _trace(a) == _trace(b)
+    default = make_solver(solver, {"sims": 150})
+    assert _trace(a) != _trace(run_episode(make_domain(domain), default, 13, n_particles=200))

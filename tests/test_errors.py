@@ -70,6 +70,14 @@ def test_errors_share_one_family() -> None:
         (["run", "--domain", "tiger", "--solver", "pomcp", "--sims", "-2"], "sims must be"),
         (["run", "--domain", "tiger", "--solver", "pomcp", "--set", "c"], "--set expects"),
         (
+            ["run", "--domain", "lightdark1d", "--solver", "pomcp", "--set", "rollout=heuristic"],
+            "rollout='heuristic' needs a domain rollout policy, but lightdark1d has none",
+        ),
+        (
+            ["run", "--domain", "tiger", "--solver", "strug", "--set", "exploration=muzero"],
+            "exploration must be one of fixed, normalized, got 'muzero'",
+        ),
+        (
             ["bench", "--domains", "tiger", "--solvers", "random", "--seeds", "0", "--out", "x"],
             "seeds must be",
         ),

@@ -16,22 +16,24 @@ next. Three answers, chosen by a config's ``widening`` field:
   their parameters explored without paying for the parameters of the others.
 * ``"auto"``: ``"all"`` on a finite action space, else the solver's default.
 
-UCB is ``Q + c sqrt(log N / n)`` with unvisited children tried first, in order
-(POMCPOW.jl's ``MaxUCB``). A child marked *solved* (:meth:`ActionTree.mark_solved`)
-competes with its value alone, without the exploration term: its value is known
-exactly, so visiting it again cannot teach anything (MCTS-Solver, Winands, Bjornsson &
-Saito 2008). Storage is flat lists indexed by node id.
+UCB is :func:`planners.solvers.exploration.ucb_select`: ``Q + c sqrt(log N / n)``
+(``normalized=False``, POMCPOW.jl's ``MaxUCB``) or its scale-free form with Q min-max
+normalised over the node's visited children; unvisited children are tried first, in
+order. A child marked *solved* (:meth:`ActionTree.mark_solved`) competes with its value
+alone, without the exploration term: its value is known exactly, so visiting it again
+cannot teach anything (MCTS-Solver, Winands, Bjornsson & Saito 2008). Storage is flat
+lists indexed by node id.
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Hashable
 
 import numpy as np
 
 from planners.errors import ConfigError, check_positive_float
 from planners.pomdp import ActionSpace
+from planners.solvers.exploration import ucb_select
 
 WIDENING_MODES = ("auto", "all", "dpw", "hpw")
 
@@ -71,10 +73,12 @@ class ActionTree:
         c: float,
         rng: np.random.Generator,
         uniform: Callable[[], float],
+        normalized: bool = False,
     ) -> None:
         if mode not in ("all", "dpw", "hpw"):
             raise ConfigError(f"ActionTree mode must be all, dpw or hpw, got {mode!r}")
         self.space, self.mode, self.k, self.alpha, self.c = space, mode, k, alpha, c
+        self.normalized = normalized
         self.rng, self.u = rng, uniform
         self.actions = list(space.discretized)
         self.n_schemas = len(space.schemas)
@@ -122,17 +126,9 @@ class ActionTree:
                 self.s_solved[snode] = True
 
     def _ucb(self, children: list[int], n_parent: int) -> int:
-        a_n, a_q, solved, c = self.a_n, self.a_q, self.a_solved, self.c
-        logn = math.log(n_parent) if n_parent > 0 else 0.0
-        best, best_v = children[0], -math.inf
-        for j in children:
-            n = a_n[j]
-            if n == 0:
-                return j
-            v = a_q[j] if solved[j] else a_q[j] + c * math.sqrt(logn / n)
-            if v > best_v:
-                best_v, best = v, j
-        return best
+        return ucb_select(
+            children, self.a_q, self.a_n, n_parent, self.c, self.normalized, self.a_solved
+        )
 
     def select(self, h: int, n_h: int) -> tuple[int, int]:
         """``(action node, schema node or -1)`` to simulate from belief node ``h``.
@@ -164,18 +160,16 @@ class ActionTree:
                 self.s_solved.append(False)
                 self.s_owner.append(h)
         # 1) UCB over the discrete schema choice.
-        s_n, s_q, s_solved, c = self.s_n, self.s_q, self.s_solved, self.c
-        snode = -1
-        logn = math.log(n_h) if n_h > 0 else 0.0
-        best_v = -math.inf
-        for j in range(first, first + self.n_schemas):
-            n = s_n[j]
-            if n == 0:
-                snode = j
-                break
-            v = s_q[j] if s_solved[j] else s_q[j] + c * math.sqrt(logn / n)
-            if v > best_v:
-                best_v, snode = v, j
+        s_n = self.s_n
+        snode = ucb_select(
+            range(first, first + self.n_schemas),
+            self.s_q,
+            s_n,
+            n_h,
+            self.c,
+            self.normalized,
+            self.s_solved,
+        )
         schema = snode - first
         # 2) Progressive widening over that schema's continuous parameters.
         kids = self.s_children[snode]

@@ -29,7 +29,12 @@ from planners.belief import ParticleBelief
 from planners.entropy import particle_entropy
 from planners.errors import check_positive_float
 from planners.solvers.base import SearchInfo
-from planners.solvers.belief_tree import BeliefTreeConfig, belief_tree_search, root_particles
+from planners.solvers.belief_tree import (
+    BeliefTreeConfig,
+    EpisodeSteps,
+    belief_tree_search,
+    root_particles,
+)
 from planners.solvers.entropy_regularized import entropy_value
 
 
@@ -67,7 +72,7 @@ def most_likely_state(pomdp: Any, belief: ParticleBelief) -> Any:
     return belief.states[int(np.argmin(((features - mean) ** 2).sum(axis=1)))]
 
 
-class ActiveLearningPlanner:
+class ActiveLearningPlanner(EpisodeSteps):
     """Learn (entropy reduction only) until confident, then exploit the MAP model."""
 
     def __init__(self, config: ActiveLearningConfig, pomdp: Any) -> None:
@@ -86,12 +91,20 @@ class ActiveLearningPlanner:
                 pomdp, cfg, states, weights, rng,
                 node_value=self.value, beta=cfg.beta, reward_weight=0.0, c=cfg.beta,
                 terminal_bonus=lambda h_left: -cfg.beta * max(h_left - threshold, 0.0),
+                steps_taken=self.steps_taken,
             )  # fmt: skip
             phase = "learn"
         else:
             state = most_likely_state(pomdp, belief)
             result = belief_tree_search(
-                pomdp, cfg, [state], np.ones(1), rng, node_value=None, beta=0.0
+                pomdp,
+                cfg,
+                [state],
+                np.ones(1),
+                rng,
+                node_value=None,
+                beta=0.0,
+                steps_taken=self.steps_taken,
             )
             phase = "exploit"
         action = result.best if result.best is not None else pomdp.action_space().sample(rng)

@@ -14,8 +14,9 @@ belief, particle i of every node descending from root particle i), as in PFT-DPW
 
 The value backed up through a child is ``reward_weight * r + bonus + gamma * V(b')``
 with ``bonus = beta * (value(b) - value(b'))``: a reduction of TRU (STRUG) or of
-entropy (Entropy Regularized) pays. A new child gets a random rollout from one of its
-particles (drawn by weight), without bonus, as in the paper's Algorithm 2.
+entropy (Entropy Regularized) pays. A new child gets a rollout (``rollout``: random,
+as in the paper's Algorithm 2, a plan, or the domain's heuristic) from one of its
+particles (drawn by weight), without bonus.
 
 Actions come from :class:`planners.solvers.action_tree.ActionTree` (HPW by default on
 hybrid action spaces); observations are progressively widened (``k_obs * N(ha) ^
@@ -38,9 +39,10 @@ import numpy as np
 from planners.errors import ConfigError, check_positive_float, check_positive_int
 from planners.solvers.action_tree import ActionTree, check_widening, resolve_widening
 from planners.solvers.base import Budget, SearchInfo, TreeSearchConfig, UniformStream
+from planners.solvers.rollout import check_rollout, make_rollout
 
 #: Leaf estimators of a new belief node.
-ROLLOUTS = ("random", "plan")
+ROLLOUTS = ("random", "plan", "heuristic")
 
 #: Where terminal actions are solved (see ``BeliefTreeConfig.solve_terminal``).
 SOLVE_TERMINAL = ("auto", "always", "never")
@@ -85,8 +87,13 @@ class BeliefTreeConfig(TreeSearchConfig):
             one particle drawn by weight) or ``"plan"`` (draw two particles i, j by
             weight and execute i's uncertainty-free plan, ``pomdp.plan_for``, from j:
             its expectation is the value of committing to a plan under the node's
-            belief, high where the belief is concentrated). Default ``"random"``;
-            STRUG, which owns the uncertainty-free planner, defaults to ``"plan"``.
+            belief, high where the belief is concentrated), or ``"heuristic"`` (the
+            domain's :meth:`rollout_policy` from one particle drawn by weight). Default
+            ``"random"``; STRUG, which owns the uncertainty-free planner, defaults to
+            ``"plan"``.
+        exploration: ``"fixed"`` (default) or ``"normalized"`` UCB (see
+            :class:`TreeSearchConfig`); ``c_normalized`` its constant (default 1.0).
+        horizon: ``"receding"`` (default) or ``"episode"`` (see :class:`TreeSearchConfig`).
     """
 
     particles: int = 32
@@ -107,12 +114,21 @@ class BeliefTreeConfig(TreeSearchConfig):
                 f"solve_terminal must be one of {', '.join(SOLVE_TERMINAL)}, "
                 f"got {self.solve_terminal!r}"
             )
-        if self.rollout not in ROLLOUTS:
-            raise ConfigError(f"rollout must be one of {', '.join(ROLLOUTS)}, got {self.rollout!r}")
+        check_rollout(self.rollout, ROLLOUTS)
         check_positive_float("beta", self.beta, allow_zero=True)
         check_widening(self.widening, self.k_action, self.alpha_action)
         check_positive_float("k_obs", self.k_obs)
         check_positive_float("alpha_obs", self.alpha_obs, allow_zero=True, upper=1.0)
+
+
+class EpisodeSteps:
+    """The real steps of the episode a belief-tree planner serves (``horizon="episode"``)."""
+
+    steps_taken: int = 0
+
+    def observe(self, action: Hashable, observation: Any) -> None:
+        """Count one real step (the runner calls this after every step)."""
+        self.steps_taken += 1
 
 
 def root_particles(
@@ -194,6 +210,7 @@ def belief_tree_search(
     reward_weight: float = 1.0,
     c: float | None = None,
     terminal_bonus: Callable[[float], float] | None = None,
+    steps_taken: int = 0,
 ) -> TreeResult:
     """Search from the belief ``(root_states, root_weights)``.
 
@@ -207,22 +224,37 @@ def belief_tree_search(
             for no bonus.
         beta: bonus weight.
         reward_weight: weight of the task reward (0 for pure information gathering).
-        c: UCB constant (default: the config's, else the domain's largest |reward|).
+        c: UCB constant of ``exploration="fixed"`` (default: the config's, else the
+            domain's largest |reward|); normalised exploration uses ``c_normalized``.
         terminal_bonus: bonus of a transition that ends the episode, as a function of
             the parent's value (default: none).
+        steps_taken: real steps of the episode so far (``horizon="episode"``).
     """
     budget = Budget(config.sims, config.time_limit)
-    depth, c_default, gamma = config.resolved(pomdp)
-    c = c_default if c is None else c
+    _, c_default, gamma = config.resolved(pomdp)
+    depth = config.search_depth(pomdp, steps_taken)
+    c = c_default if c is None or config.normalized else c
     space = pomdp.action_space()
     widening = resolve_widening(config.widening, space, "hpw")
     step = pomdp.step
     discrete_obs = pomdp.discrete_observations
     k_o, al_o = config.k_obs, config.alpha_obs
     u = UniformStream(rng)
-    tree = ActionTree(space, widening, config.k_action, config.alpha_action, c, rng, u)
+    tree = ActionTree(
+        space, widening, config.k_action, config.alpha_action, c, rng, u, config.normalized
+    )
     select, backup, a_action, a_n = tree.select, tree.update, tree.a_action, tree.a_n
     rollout_actions = list(space.discretized) if widening == "all" else None
+    run_from = make_rollout(
+        pomdp,
+        "random" if config.rollout == "plan" else config.rollout,
+        rollout_actions,
+        space,
+        depth,
+        gamma,
+        rng,
+        u,
+    )
     m = len(root_states)
     with_bonus = node_value is not None and beta > 0.0
     solve_terminal = config.solve_terminal == "always" or (
@@ -313,26 +345,15 @@ def belief_tree_search(
 
     def rollout(h: int, d: int) -> float:
         s = b_states[h][draw(h)]
+        if plan_for is None:
+            return run_from(s, d)
         total, disc = 0.0, 1.0
-        if plan_for is not None:
-            for a in plan_for(b_states[h][draw(h)], rng)[: depth - d]:
-                s, _, r, done = step(s, a, rng)
-                total += disc * r
-                if done:
-                    break
-                disc *= gamma
-            return total
-        while d < depth:
-            if rollout_actions is not None:
-                a = rollout_actions[int(u() * len(rollout_actions))]
-            else:
-                a = space.sample(rng)
+        for a in plan_for(b_states[h][draw(h)], rng)[: depth - d]:
             s, _, r, done = step(s, a, rng)
             total += disc * r
             if done:
                 break
             disc *= gamma
-            d += 1
         return total
 
     def simulate(h: int, d: int) -> float:

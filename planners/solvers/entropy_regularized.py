@@ -22,6 +22,7 @@ from planners.entropy import particle_entropy
 from planners.solvers.base import SearchInfo
 from planners.solvers.belief_tree import (
     BeliefTreeConfig,
+    EpisodeSteps,
     NodeValue,
     belief_tree_search,
     root_particles,
@@ -50,7 +51,7 @@ class EntropyConfig(BeliefTreeConfig):
         return EntropyPlanner(self, pomdp)
 
 
-class EntropyPlanner:
+class EntropyPlanner(EpisodeSteps):
     """Belief-tree search with reward ``R + beta * (H(b) - H(b'))``."""
 
     def __init__(self, config: EntropyConfig, pomdp: Any) -> None:
@@ -63,7 +64,7 @@ class EntropyPlanner:
         states, weights = root_particles(self.pomdp, belief, cfg.particles, rng)
         result = belief_tree_search(
             self.pomdp, cfg, states, weights, rng,
-            node_value=self.value, beta=cfg.beta,
+            node_value=self.value, beta=cfg.beta, steps_taken=self.steps_taken,
         )  # fmt: skip
         action = result.best if result.best is not None else self.pomdp.action_space().sample(rng)
         info = result.search_info(entropy=result.root_value)

@@ -13,7 +13,7 @@ Action selection comes from :class:`planners.solvers.action_tree.ActionTree`:
 ``widening="auto"`` (default) is the published algorithm, DPW over the whole action
 space when it has continuous parameters and every action on a finite space;
 ``"hpw"`` swaps in STRUG's hierarchical widening so its effect alone can be measured.
-Rollouts are uniformly random.
+Rollouts are uniformly random unless ``rollout="heuristic"``.
 
 Storage is flat lists indexed by node id. Per belief node: visits, the observation,
 and its particles (states, rewards, terminal flags, cumulative weights for O(log n)
@@ -42,6 +42,7 @@ from planners.solvers.base import (
     TreeSearchConfig,
     UniformStream,
 )
+from planners.solvers.rollout import check_rollout, domain_policy, make_rollout
 
 
 @dataclass(frozen=True)
@@ -62,6 +63,12 @@ class POMCPOWConfig(TreeSearchConfig):
             paper's LightDark).
         widening: action selection, ``"auto"`` (default: DPW on continuous action
             spaces, every action on finite ones), ``"all"``, ``"dpw"`` or ``"hpw"``.
+        exploration: ``"fixed"`` (default) or ``"normalized"`` UCB (see
+            :class:`TreeSearchConfig`); ``c_normalized`` its constant (default 1.0).
+        horizon: ``"receding"`` (default) or ``"episode"`` (see :class:`TreeSearchConfig`).
+        rollout: ``"random"`` (default: uniform actions, from the discretised set when
+            every action is a child, else from the whole space) or ``"heuristic"`` (the
+            domain's :meth:`rollout_policy`).
     """
 
     name: ClassVar[str] = "pomcpow"
@@ -71,10 +78,12 @@ class POMCPOWConfig(TreeSearchConfig):
     k_obs: float = 5.0
     alpha_obs: float = 1.0 / 15.0
     widening: str = "auto"
+    rollout: str = "random"
 
     def __post_init__(self) -> None:
         super().__post_init__()
         check_widening(self.widening, self.k_action, self.alpha_action)
+        check_rollout(self.rollout)
         check_positive_float("k_obs", self.k_obs)
         check_positive_float("alpha_obs", self.alpha_obs, allow_zero=True, upper=1.0)
 
@@ -91,20 +100,31 @@ class POMCPOWPlanner:
         self.space = pomdp.action_space()
         self.depth, self.c, self.gamma = config.resolved(pomdp)
         self.widening = resolve_widening(config.widening, self.space, "dpw")
+        if config.rollout == "heuristic":
+            domain_policy(pomdp)  # a domain without one fails here, not mid-episode
+        self.steps_taken = 0
+
+    def observe(self, action: Hashable, observation: Any) -> None:
+        """Count the real steps of the episode (for ``horizon="episode"``)."""
+        self.steps_taken += 1
 
     def act(self, belief: ParticleBelief, rng: np.random.Generator) -> tuple[Hashable, SearchInfo]:
         cfg = self.config
         budget = Budget(cfg.sims, cfg.time_limit)
         step, loglik = self.pomdp.step, self.pomdp.obs_loglik
         space = self.space
-        depth, gamma = self.depth, self.gamma
+        depth, gamma = cfg.search_depth(self.pomdp, self.steps_taken), self.gamma
         k_o, al_o = cfg.k_obs, cfg.alpha_obs
         u = UniformStream(rng)
         exp = math.exp
-        tree = ActionTree(space, self.widening, cfg.k_action, cfg.alpha_action, self.c, rng, u)
+        tree = ActionTree(
+            space, self.widening, cfg.k_action, cfg.alpha_action, self.c, rng, u, cfg.normalized
+        )
         select, backup, a_action, a_n = tree.select, tree.update, tree.a_action, tree.a_n
         rollout_actions = list(space.discretized) if self.widening == "all" else None
-        n_rollout = len(rollout_actions) if rollout_actions else 0
+        rollout = make_rollout(
+            self.pomdp, cfg.rollout, rollout_actions, space, depth, gamma, rng, u
+        )
 
         # Belief (observation) nodes.
         b_n: list[int] = []
@@ -125,22 +145,6 @@ class POMCPOWPlanner:
             b_cdf.append([])
             tree.add_belief_node()
             return len(b_n) - 1
-
-        def rollout(s: Any, d: int) -> float:
-            total = 0.0
-            disc = 1.0
-            while d < depth:
-                if rollout_actions is not None:
-                    a = rollout_actions[int(u() * n_rollout)]
-                else:
-                    a = space.sample(rng)
-                s, _, r, done = step(s, a, rng)
-                total += disc * r
-                if done:
-                    break
-                disc *= gamma
-                d += 1
-            return total
 
         def simulate(s: Any, h: int, d: int) -> float:
             nh = b_n[h]

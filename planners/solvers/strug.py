@@ -18,7 +18,12 @@ import numpy as np
 from planners.belief import ParticleBelief
 from planners.errors import check_positive_int
 from planners.solvers.base import SearchInfo
-from planners.solvers.belief_tree import BeliefTreeConfig, belief_tree_search, root_particles
+from planners.solvers.belief_tree import (
+    BeliefTreeConfig,
+    EpisodeSteps,
+    belief_tree_search,
+    root_particles,
+)
 from planners.tru import compatibility_matrix
 
 
@@ -57,7 +62,7 @@ class STRUGConfig(BeliefTreeConfig):
         return STRUGPlanner(self, pomdp)
 
 
-class STRUGPlanner:
+class STRUGPlanner(EpisodeSteps):
     """Compatibility matrix + TRU-guided belief-tree search, rebuilt at every decision."""
 
     def __init__(self, config: STRUGConfig, pomdp: Any) -> None:
@@ -77,6 +82,7 @@ class STRUGPlanner:
             rng,
             node_value=lambda _states, w: matrix.tru(w),
             beta=cfg.beta,
+            steps_taken=self.steps_taken,
         )
         action = result.best if result.best is not None else self.pomdp.action_space().sample(rng)
         info = result.search_info(

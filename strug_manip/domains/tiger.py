@@ -16,7 +16,7 @@ import numpy as np
 
 from planners.belief import ParticleBelief
 from planners.errors import ConfigError, ObservationError, check_positive_int
-from planners.pomdp import ActionSchema, ActionSpace, GenerativePOMDP, Step
+from planners.pomdp import ActionSchema, ActionSpace, GenerativePOMDP, RolloutPolicy, Step
 
 LISTEN, OPEN_LEFT, OPEN_RIGHT = 0, 1, 2
 HEAR_LEFT, HEAR_RIGHT, HEAR_NOTHING = 0, 1, 2
@@ -26,6 +26,46 @@ _TIGER_SPACE = ActionSpace(
     schemas=(ActionSchema("listen"), ActionSchema("open-left"), ActionSchema("open-right")),
     discretized=(LISTEN, OPEN_LEFT, OPEN_RIGHT),
 )
+
+
+class ListenUntilSure(RolloutPolicy):
+    """The Tiger rollout heuristic: listen until one side leads by ``margin``, then open.
+
+    Its memory is the number of ``hear-left`` minus ``hear-right`` observations since the
+    rollout started or last opened a door. While that lead is below ``margin`` it
+    listens; then it opens the door the tiger was heard less behind, and starts
+    counting again (on :class:`TigerClassic` the tiger is placed anew). ``nothing``
+    (ExtendedTiger's uninformative listens) changes nothing. Margin 2 (default): with
+    listening accuracy 0.85 a lead of 2 puts the belief at 0.85^2 / (0.85^2 + 0.15^2)
+    = 0.97, where opening pays in expectation on both Tiger scales (+9.4 on Tiger, +6.7
+    on TigerClassic) while a lead of 1 (0.85) would lose on TigerClassic (-6.5); this is
+    the textbook policy of the classic Tiger.
+
+    Args:
+        margin: the lead of one side, in observations, at which a door is opened.
+    """
+
+    def __init__(self, margin: int = 2) -> None:
+        self.margin = check_positive_int("margin", margin)
+
+    def start(self) -> int:
+        return 0
+
+    def action(self, memory: int, rng: np.random.Generator) -> int:
+        if memory >= self.margin:
+            return OPEN_RIGHT
+        if memory <= -self.margin:
+            return OPEN_LEFT
+        return LISTEN
+
+    def update(self, memory: int, a: Hashable, o: Any) -> int:
+        if a != LISTEN:
+            return 0
+        if o == HEAR_LEFT:
+            return memory + 1
+        if o == HEAR_RIGHT:
+            return memory - 1
+        return memory
 
 
 class Tiger(GenerativePOMDP):
@@ -70,6 +110,10 @@ class Tiger(GenerativePOMDP):
     def plan_for(self, s: int, rng: np.random.Generator) -> list[int]:
         """The uncertainty-free plan: open the door without the tiger."""
         return [OPEN_RIGHT if s == 0 else OPEN_LEFT]
+
+    def rollout_policy(self) -> ListenUntilSure:
+        """The domain's rollout heuristic: :class:`ListenUntilSure` with margin 2."""
+        return ListenUntilSure()
 
     def obs_loglik(self, o: Any, s_next: int, a: Hashable) -> float:
         if a == LISTEN:

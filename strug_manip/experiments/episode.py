@@ -125,6 +125,7 @@ def run_episode(
     state = pomdp.sample_initial_state(world_rng)
     belief = pomdp.initial_belief(belief_rng, n_particles)
     planner = solver.planner(pomdp)
+    observe = getattr(planner, "observe", None)
     names = pomdp.action_space().name
     total, disc = 0.0, 1.0
     records: list[StepRecord] = []
@@ -137,6 +138,8 @@ def run_episode(
         disc *= pomdp.discount
         if not done:
             belief, _ = update_belief(pomdp, belief, action, obs, belief_rng)
+            if observe is not None:
+                observe(action, obs)  # lets a planner keep its tree (reuse_tree)
         rec = StepRecord(
             step=t,
             action=names(action),
