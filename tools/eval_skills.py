@@ -517,7 +517,7 @@ def plot_drag(records: list[dict], path: Path, seeds: str) -> None:
     parts = [p for r in records for p in r["parts"]]
     single = [w["displacement"] for p in parts for w in p["wrong"]]
     four = [p["sequence"][-1] for p in parts if p.get("sequence")]
-    fig, axes = plt.subplots(1, 2, figsize=(10, 3.6), sharey=False)
+    fig, axes = plt.subplots(1, 2, figsize=(11, 3.6), sharey=False)
     bins = np.linspace(0.0, max(0.3, max(single + four, default=0.3)), 31)
     for ax, data, title in (
         (axes[0], single, f"one wrong pull ({len(single)} pulls)"),
