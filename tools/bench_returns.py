@@ -74,6 +74,7 @@ from strug_manip.domains import make_domain
 from strug_manip.domains.tiger import LISTEN, OPEN_LEFT, OPEN_RIGHT, ListenUntilSure
 from strug_manip.experiments.bench import load_results, solver_config
 from strug_manip.experiments.episode import episode_generators, run_episode
+from strug_manip.experiments.seeds import seed_range
 
 POMDP_PY_VERSION = "1.3.5.1"
 DOMAIN = "tigerclassic"
@@ -384,16 +385,6 @@ def _progress(total: int, enabled: bool) -> Any:
     return tqdm(total=total, unit="episode", file=sys.stderr, disable=not enabled, smoothing=0.05)
 
 
-def _seeds(text: str) -> list[int]:
-    try:
-        lo, hi = (int(x) for x in text.split(":"))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected START:END like 0:300, got {text!r}") from None
-    if not 0 <= lo < hi:
-        raise argparse.ArgumentTypeError(f"need 0 <= START < END, got {text!r}")
-    return list(range(lo, hi))
-
-
 def _names(valid: list[str], what: str) -> Callable[[str], list[str]]:
     def parse(text: str) -> list[str]:
         names = [x.strip() for x in text.split(",") if x.strip()]
@@ -412,7 +403,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser = argparse.ArgumentParser(
         description="Returns at equal budgets: our POMCP options vs pomdp_py POUCT, classic Tiger."
     )
-    parser.add_argument("--seeds", type=_seeds, default=_seeds("0:300"), help="START:END")
+    parser.add_argument("--seeds", type=seed_range, default=range(300), help="START:END")
     parser.add_argument(
         "--budgets",
         type=_names(list(BUDGETS), "budget"),

@@ -55,13 +55,14 @@ from planners.errors import UnknownNameError
 from strug_manip.control import ControlContext, OpenDoor, OpenDrawer, part_at
 from strug_manip.control.grasps import PITCHES
 from strug_manip.control.params import DEFAULT_PARAMS
+from strug_manip.experiments.seeds import evaluation_seeds
 from strug_manip.objects.generator import axis_angle
 from strug_manip.objects.hypotheses import BelievedJoint
 from strug_manip.world import ManipulationWorld, SceneConfig
 from strug_manip.world.views import take_views
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from eval_perception import hypothesis_joint, parse_seeds, true_parts
+from eval_perception import hypothesis_joint, true_parts
 
 #: Share of the commanded travel the part must follow for a grasp to count as held.
 MOVED_SHARE = 0.5
@@ -174,7 +175,12 @@ def summary(records: list[dict]) -> dict:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--seeds", required=True, help="START:STOP generator seeds (< 10,000)")
+    ap.add_argument(
+        "--seeds",
+        type=evaluation_seeds,
+        required=True,
+        help="START:STOP generator seeds (< 10,000)",
+    )
     ap.add_argument("--grasps", type=int, default=2, help="grasps per part and sampler")
     ap.add_argument("--out", type=Path, default=None, help="folder of results.jsonl (resume)")
     ap.add_argument("--json", action="store_true")
@@ -183,7 +189,7 @@ def main(argv: list[str] | None = None) -> int:
         raise SystemExit(f"--grasps must be >= 1, got {args.grasps}")
     from tqdm import tqdm
 
-    seeds = parse_seeds(args.seeds)
+    seeds = args.seeds
     records: list[dict] = []
     path = None
     if args.out is not None:

@@ -31,6 +31,7 @@ from perception.inputs import check_view
 from perception.likelihood import quantile_hausdorff
 from perception.parts import Perceiver, extract
 from strug_manip.domains.manipulation.belief import SIDE_AXES, BeliefConfig, sample_particles
+from strug_manip.experiments.seeds import evaluation_seeds
 from strug_manip.objects.assembly import FRONT, GAP, CabinetModel, PartModel, assemble
 from strug_manip.world.perception_data import CabinetViewer, ViewRanges
 from strug_manip.world.scene import SceneConfig
@@ -38,7 +39,7 @@ from strug_manip.world.sim import ManipulationWorld
 from strug_manip.world.views import cabinet_cloud, look_poses, place_robot
 
 sys.path.insert(0, __file__.rsplit("/", 1)[0])
-from eval_perception import oracle_output, parse_seeds
+from eval_perception import oracle_output
 
 #: The probe: a drawer pulled this far [m], a door opened this far [rad].
 PROBE_DRAWER, PROBE_DOOR = 0.12, 0.4
@@ -134,13 +135,13 @@ def probe_cabinet(seed: int, perceiver: Perceiver | None, rng: np.random.Generat
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--seeds", required=True)
+    ap.add_argument("--seeds", type=evaluation_seeds, required=True, help="START:STOP")
     ap.add_argument("--oracle", action="store_true")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args(argv)
     perceiver = None if args.oracle else Perceiver()
     rng = np.random.default_rng(0)
-    rows = [r for s in parse_seeds(args.seeds) for r in probe_cabinet(s, perceiver, rng)]
+    rows = [r for s in args.seeds for r in probe_cabinet(s, perceiver, rng)]
     right = [r["H"][r["right"]] for r in rows]
     wrong = [min(v for k, v in r["H"].items() if k not in ("true", r["right"])) for r in rows]
     first = sum(h < w for h, w in zip(right, wrong, strict=True))

@@ -68,6 +68,7 @@ from strug_manip.domains.manipulation.belief import (
     noisy_view,
     sample_particles,
 )
+from strug_manip.experiments.seeds import evaluation_seeds
 from strug_manip.objects import generate_cabinet
 from strug_manip.objects.assembly import FRONT, GAP, scene_object_pose
 from strug_manip.world.perception_data import LabelledView, render_episode
@@ -324,18 +325,6 @@ def evaluate_cabinet(
     )
 
 
-def parse_seeds(text: str) -> list[int]:
-    try:
-        lo, hi = (int(x) for x in text.split(":"))
-    except ValueError:
-        raise SystemExit(f"--seeds must be START:STOP (integers), got {text!r}") from None
-    if not 0 <= lo < hi:
-        raise SystemExit(f"--seeds must satisfy 0 <= START < STOP, got {text!r}")
-    if hi > 10_000:
-        raise SystemExit(f"--seeds must stay below 10,000 (evaluation seeds), got {text!r}")
-    return list(range(lo, hi))
-
-
 def summarise(results: list[dict]) -> tuple[dict, dict[str, int]]:
     """The JSON object of the issue's acceptance, and the failure causes (per part)."""
     rec = sum((r["rec"] for r in results), Counter())
@@ -363,7 +352,12 @@ def summarise(results: list[dict]) -> tuple[dict, dict[str, int]]:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--seeds", required=True, help="START:STOP generator seeds (< 10,000)")
+    ap.add_argument(
+        "--seeds",
+        type=evaluation_seeds,
+        required=True,
+        help="START:STOP generator seeds (< 10,000)",
+    )
     ap.add_argument("--views", type=int, default=4)
     ap.add_argument("--particles", type=int, default=50)
     ap.add_argument("--noisy-runs", type=int, default=2)
@@ -376,7 +370,7 @@ def main(argv: list[str] | None = None) -> int:
 
     if not 0.0 <= args.dropout < 1.0:
         raise SystemExit(f"--dropout must be in [0, 1), got {args.dropout}")
-    seeds = parse_seeds(args.seeds)
+    seeds = args.seeds
     SceneConfig()  # the scene the views come from
     perceiver = None if args.oracle else Perceiver(args.weights)
     rng = np.random.default_rng(0)
@@ -391,7 +385,7 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     pct = lambda d: f"{d['ok']}/{d['n']} = {100 * d['ok'] / max(d['n'], 1):.1f}%"  # noqa: E731
     print(
-        f"seeds {args.seeds}, {args.views} views per cabinet"
+        f"seeds {seeds.start}:{seeds.stop}, {args.views} views per cabinet"
         + (" (oracle maps)" if args.oracle else "")
     )
     print(f"parts found (per view, IoU >= 0.5): {pct(out['parts_found'])}")

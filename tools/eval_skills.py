@@ -73,6 +73,7 @@ from strug_manip.control import (
 )
 from strug_manip.control.params import DEFAULT_PARAMS
 from strug_manip.domains.manipulation.rules import dragged, inside, open_enough
+from strug_manip.experiments.seeds import seed_range
 from strug_manip.objects.hypotheses import BelievedJoint, believed_spec, cell_joints, model_of
 from strug_manip.world import ManipulationWorld, SceneConfig
 
@@ -454,21 +455,13 @@ def load(path: Path) -> dict[int, dict]:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--seeds", required=True, help="A:B, generator seeds A..B-1")
+    ap.add_argument("--seeds", type=seed_range, required=True, help="A:B, generator seeds A..B-1")
     ap.add_argument("--json", action="store_true", help="print one JSON object")
     ap.add_argument("--out", type=Path, default=None, help="results folder (resumable)")
     ap.add_argument("--workers", type=int, default=1, help="processes (default 1)")
     ap.add_argument("--plot", type=Path, default=None, help="write the drag distributions (PNG)")
     args = ap.parse_args(argv)
-    try:
-        a, b = (int(v) for v in args.seeds.split(":"))
-        assert 0 <= a < b
-    except (ValueError, AssertionError):
-        print(
-            f"eval_skills: error: --seeds must be A:B with 0 <= A < B, got {args.seeds!r}",
-            file=sys.stderr,
-        )
-        return 2
+    a, b = args.seeds.start, args.seeds.stop
     out_dir = args.out or Path(f"runs/eval_skills_{a}_{b}")
     out_dir.mkdir(parents=True, exist_ok=True)
     path = out_dir / "results.jsonl"

@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
+from strug_manip.experiments.seeds import seed_range
 from strug_manip.world.perception_data import (
     DEFAULT_VIEWS,
     ViewRanges,
@@ -31,16 +32,6 @@ from strug_manip.world.perception_data import (
     save_views,
     shard_path,
 )
-
-
-def _parse_seeds(text: str) -> list[int]:
-    try:
-        lo, hi = (int(x) for x in text.split(":"))
-    except ValueError:
-        raise SystemExit(f"--seeds must be START:STOP (integers), got {text!r}") from None
-    if not 0 <= lo < hi:
-        raise SystemExit(f"--seeds must satisfy 0 <= START < STOP, got {text!r}")
-    return list(range(lo, hi))
 
 
 def _render_one(seed: int, views: int, out: str, empty_prob: float) -> int:
@@ -73,7 +64,7 @@ def _picture(out: Path, seed: int, path: Path) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--seeds", required=True, help="START:STOP generator seeds")
+    ap.add_argument("--seeds", type=seed_range, required=True, help="START:STOP generator seeds")
     ap.add_argument("--views", type=int, default=DEFAULT_VIEWS, help="views per cabinet")
     ap.add_argument("--out", type=Path, required=True)
     ap.add_argument("--workers", type=int, default=2)
@@ -84,7 +75,7 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     from tqdm import tqdm
 
-    seeds = _parse_seeds(args.seeds)
+    seeds = args.seeds
     todo = [s for s in seeds if not shard_path(args.out, s).exists()]
     print(f"{len(seeds) - len(todo)} of {len(seeds)} cabinets already in {args.out}")
     t0 = time.perf_counter()
