@@ -1,4 +1,5 @@
-"""Shared fixtures: toy domains and solver configs with small budgets."""
+"""Shared fixtures: toy domains and solver configs with small budgets; the robot world
+of ``models/cabinets/drawers_11`` and a control context, one per test module."""
 
 from __future__ import annotations
 
@@ -22,3 +23,23 @@ def rng() -> np.random.Generator:
 @pytest.fixture(params=TOY_DOMAINS)
 def toy_domain(request):
     return make_domain(request.param)
+
+
+@pytest.fixture(scope="module")
+def world():
+    """The Fetch before the drawers-only cabinet of seed 11 (``drawers_11``), one per
+    test module (a module's tests may move it; each resets what it needs)."""
+    from strug_manip.world import ManipulationWorld, SceneConfig
+
+    w = ManipulationWorld(SceneConfig(cabinet_seed=11, cabinet_kinds=("drawer",)))
+    yield w
+    w.close()
+
+
+@pytest.fixture(scope="module")
+def ctx():
+    """A fresh :class:`~strug_manip.control.ControlContext` (IK, planners, caches) per
+    test module."""
+    from strug_manip.control import ControlContext
+
+    return ControlContext()

@@ -14,17 +14,8 @@ from planners.errors import ConfigError, UnknownNameError
 from strug_manip.control import ControlContext
 from strug_manip.control.contacts import ContactChecker
 from strug_manip.robot.fetch import ARM_TORSO_JOINTS, BASE_JOINTS, TUCK
-from strug_manip.world.scene import SceneConfig
-from strug_manip.world.sim import ManipulationWorld
 
 BASE = np.zeros(3)
-
-
-@pytest.fixture(scope="module")
-def world() -> ManipulationWorld:
-    w = ManipulationWorld(SceneConfig(cabinet_seed=11, cabinet_kinds=("drawer",)))
-    yield w
-    w.close()
 
 
 @pytest.fixture(scope="module")

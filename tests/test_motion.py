@@ -34,7 +34,6 @@ from strug_manip.control.motion import (
     MotionPlan,
 )
 from strug_manip.robot.fetch import ARM_TORSO_JOINTS, BASE_JOINTS, TUCK
-from strug_manip.world.scene import SceneConfig
 from strug_manip.world.sim import ManipulationWorld
 
 BASE = np.zeros(3)
@@ -48,18 +47,6 @@ DRAWER_OPEN = {"joint_1": 0.2}
 REPLAY_STEP = 0.005
 #: Bodies that are not the robot's (besides the cabinet's).
 NON_ROBOT = ("world", "table", "object", "cabinet_table")
-
-
-@pytest.fixture(scope="module")
-def world() -> ManipulationWorld:
-    w = ManipulationWorld(SceneConfig(cabinet_seed=11, cabinet_kinds=("drawer",)))
-    yield w
-    w.close()
-
-
-@pytest.fixture(scope="module")
-def ctx() -> ControlContext:
-    return ControlContext()
 
 
 @pytest.fixture(scope="module")

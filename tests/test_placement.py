@@ -11,29 +11,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from strug_manip.control import ControlContext, OpenDrawer, SkillPlan, handle_grasps
+from strug_manip.control import OpenDrawer, SkillPlan, handle_grasps
 from strug_manip.control.driver import BASE_SPEED
 from strug_manip.control.outcome import SkillStop, Status
 from strug_manip.control.placement import CANDIDATES, MAX_CANDIDATES, Placement, find_placement
 from strug_manip.control.plan import line_of, straight
 from strug_manip.objects.hypotheses import BelievedJoint
 from strug_manip.robot.fetch import ARM_TORSO_JOINTS, BASE_JOINTS, TUCK, speed_limits
-from strug_manip.world.scene import SceneConfig
-from strug_manip.world.sim import ManipulationWorld
 
 POS_TOL, ROT_TOL = 0.01, 0.05
-
-
-@pytest.fixture(scope="module")
-def world() -> ManipulationWorld:
-    w = ManipulationWorld(SceneConfig(cabinet_seed=11, cabinet_kinds=("drawer",)))
-    yield w
-    w.close()
-
-
-@pytest.fixture(scope="module")
-def ctx() -> ControlContext:
-    return ControlContext()
 
 
 def search(ctx, world, plan: SkillPlan, checked: bool = True) -> Placement:

@@ -18,7 +18,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from strug_manip.control import ControlContext, PullH, handle_grasps
+from strug_manip.control import PullH, handle_grasps
 from strug_manip.objects.generator import axis_angle
 from strug_manip.world import ManipulationWorld, SceneConfig
 from strug_manip.world.sim import depth_to_points
@@ -94,11 +94,6 @@ def probe_evidence(frames, part, T_world_cabinet) -> dict[str, float]:
         door = min(door, _best(lambda th, ow=ow, aw=aw: _score(
             (P - ow) @ axis_angle(aw, th).T + ow, Q), -0.4, 0.4))  # fmt: skip
     return {"drawer": drawer, "door": door}
-
-
-@pytest.fixture(scope="module")
-def ctx() -> ControlContext:
-    return ControlContext()
 
 
 @pytest.mark.parametrize(

@@ -102,11 +102,6 @@ CARRY_SHIFT_M, CARRY_SHIFT_RAD = 0.015, 0.05
 
 
 @pytest.fixture(scope="module")
-def ctx() -> ControlContext:
-    return ControlContext()
-
-
-@pytest.fixture(scope="module")
 def worlds():
     ws = {name: ManipulationWorld(cfg) for name, cfg in CABINETS.items()}
     yield ws
