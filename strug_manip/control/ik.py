@@ -382,6 +382,16 @@ class FetchIK:
         T[:3, 3] = d.site_xpos[self._site]
         return T
 
+    def body_poses(
+        self, q: Mapping[str, float], bodies: Sequence[int]
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """World positions (n, 3) [m] and orientations (w, x, y, z) (n, 4) of the
+        model's ``bodies`` (ids) at ``q`` (by name; unset joints: home/ready)."""
+        self.forward(q)
+        d = self._config.data
+        idx = np.asarray(bodies, dtype=int)
+        return d.xpos[idx].copy(), d.xquat[idx].copy()
+
     def jacobian(self, q: Mapping[str, float]) -> np.ndarray:
         """The TCP's Jacobian at ``q`` (by name; unset joints: home/ready), shape
         (6, nv): rows linear [m] then angular [rad] velocity in world axes per unit

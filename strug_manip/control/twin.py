@@ -14,18 +14,21 @@ the same :class:`~strug_manip.control.outcome.Outcome`:
    hence its duration under the one timing law (:mod:`.timing`), the same as the full
    robot's;
 2. **strength**: the hand's servos get the force and torque the Fetch's joints can
-   exert at the grasp: along each world axis ``min_j tau_j / |J_j|`` over the torso
-   and arm joints (and the base's on whole-body lines), ``tau`` their effort limits and
-   ``J`` the hand's Jacobian at the placement's grasp configuration;
+   exert at the placement's grasp configuration (:func:`arm_strength`: their effort
+   limits through the hand's Jacobian, the grasp passing a moment as well as a force);
 3. **physics**: the hand starts at the pre-grasp (the free motion of the full robot,
    collision free by construction, is not simulated), then follows the lines (their
    Cartesian poses, on the same schedule as the arm's joint path; the retreat after a
    release too: backing away can catch a handle) and grips, with the same settle and
    grip times, the same monitors (a lost grasp, the hand held back more than the
-   tracking tolerance) and the same facts measured at the end; then the hand follows
-   the full robot's stow (the same plan, :func:`~strug_manip.control.execution.
-   plan_stow`) until it is clear of the cabinet, leaves the scene, and the cabinet and
-   the object settle for :data:`COAST_TIME`.
+   tracking tolerance) and the same facts measured at the end; after the last
+   release the arm's links (mocap bodies) follow the arm's joint path too, so a
+   forearm backing out of a drawer sweeps what the full robot's would; then hand and
+   arm follow the full robot's stow (the same plan, :func:`~strug_manip.control.
+   execution.plan_stow`) until they are clear of the cabinet, leave the scene, and the
+   cabinet and the object settle for :data:`COAST_TIME`, and on while the cabinet still
+   moves (:data:`REST_SPEED`), up to the rest of the stow's duration (a drawer of a
+   dragged, tilted cabinet creeps on while the full robot stows).
 
 A twin's state (:meth:`PlanningTwin.snapshot`) includes where the full robot's base is
 believed to stand (the ``robot_base`` mocap body), from which the next placement starts.
@@ -40,6 +43,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 from mujoco import rollout
+from scipy.optimize import linprog
 
 from planners.errors import ConfigError
 from strug_manip.control import timing
@@ -65,7 +69,14 @@ from strug_manip.robot.fetch import (
     TUCK,
     speed_limits,
 )
-from strug_manip.world.floating_gripper import BALL, INTEGRAL_TIME, SLIDES, TRANSLATION_KP
+from strug_manip.world.floating_gripper import (
+    ARM_LINKS,
+    ARM_PARK,
+    BALL,
+    INTEGRAL_TIME,
+    SLIDES,
+    TRANSLATION_KP,
+)
 from strug_manip.world.scene import SceneConfig
 from strug_manip.world.sim import ManipulationWorld, WorldState
 
@@ -76,6 +87,9 @@ TIMESTEP = 0.005
 #: After its last release the hand leaves the scene (its geoms stop colliding: the full
 #: robot backs away and stows) and the cabinet and object settle for this long [s].
 COAST_TIME = 0.25
+#: A cabinet at rest: every joint of it (the parts, the base's free joint) slower than
+#: this [m/s or rad/s] (a drawer of a tilted cabinet creeping out moves 0.02 m/s).
+REST_SPEED = 0.005
 #: The hand follows the full robot's stow until it is this far from the cabinet's box
 #: for good [m] (the fingers reach 0.1 m past the TCP; the arm's links, which the twin
 #: does not have, seldom sweep the cabinet where the hand does not).
@@ -143,6 +157,8 @@ class PlanningTwin:
         self._site = m.site(GRIPPER_SITE).id
         self._tendon = m.tendon("gripper").id
         self._base_mocap = int(m.body_mocapid[m.body("robot_base").id])
+        self._arm_mocap = np.array([int(m.body_mocapid[m.body(b).id]) for b in ARM_LINKS])
+        self._arm_fetch = [self.ctx.ik.model.body(b).id for b in ARM_LINKS]
         self._obj_adr = int(m.jnt_qposadr[m.joint("object/free").id])
         self._fingers = [m.jnt_qposadr[m.joint(j).id] for j in GRIPPER_JOINTS]
         self.vmax = speed_limits(self.ctx.ik.model)
@@ -154,6 +170,12 @@ class PlanningTwin:
         self._obj_collide = _collide(m, self._obj_geom)
         # The cabinet's joints (its own planning world follows them).
         self._cabinet_joints = [*self.world.part_joints, self.world.scene.cabinet_prefix + "free"]
+        dofs = []
+        for j in self._cabinet_joints:
+            jid = m.joint(j).id
+            n = 6 if m.jnt_type[jid] == mujoco.mjtJoint.mjJNT_FREE else 1
+            dofs.append(np.arange(m.jnt_dofadr[jid], m.jnt_dofadr[jid] + n))
+        self._cabinet_dofs = np.concatenate(dofs)
         self.reset()
 
     # -- state -------------------------------------------------------------------------
@@ -294,7 +316,10 @@ class PlanningTwin:
         m = self.world.model
         base, q = placement.start_of(1 if placement.lines else 0)
         whole_body = any(bp is not None for bp in placement.base_paths)
-        force, torque = arm_strength(self.ctx, base, q, whole_body)
+        force, torque = self.ctx.memo(  # type: ignore[misc]
+            ("twin strength", id(placement)),
+            lambda: arm_strength(self.ctx, base, q, whole_body),
+        )
         ki = TRANSLATION_KP / INTEGRAL_TIME
         for i, a in enumerate(self._slide_act):
             m.actuator_forcerange[a] = [-force[i], force[i]]
@@ -317,7 +342,11 @@ class PlanningTwin:
         grip = GRIPPER_SQUEEZE if plan.carrying is not None else GRIPPER_OPEN
         start = plan.pre
 
-        def add(ps: np.ndarray, qs: np.ndarray, name: str, hold: bool, holding: bool) -> None:
+        arms: list[np.ndarray] = []  # the arm links' poses (n, L, 7), parked if unused
+        parked = self._parked_arm()
+
+        def add(ps: np.ndarray, qs: np.ndarray, name: str, hold: bool, holding: bool,
+                arm: np.ndarray | None = None) -> None:  # fmt: skip
             pos.append(ps)
             quat.append(qs)
             grips.append(np.full(len(ps), grip))
@@ -325,6 +354,7 @@ class PlanningTwin:
             held.append(np.full(len(ps), holding))
             holds.append(np.full(len(ps), hold))
             tols.append(np.full(len(ps), tol))
+            arms.append(np.repeat(parked[None], len(ps), axis=0) if arm is None else arm)
 
         def hold(seconds: float, name: str, holding: bool) -> None:
             n = max(1, round(seconds / dt))
@@ -346,31 +376,54 @@ class PlanningTwin:
                 here = (start[:3, 3], _quats(start[None, :3, :3])[0])
                 k += 1
                 continue
-            ps, qs = _line_commands(ph, placement, k, here, self.vmax, dt)
+            ps, qs, joints = _line_commands(ph, placement, k, here, self.vmax, dt)
             tol = p.tracking_tolerance if ph.tolerance is None else ph.tolerance
-            add(ps, qs, ph.name, False, ph.holding)
+            # After the last release the arm moves freely, along its joint path: its
+            # links may sweep the cabinet (e.g. back out of a drawer).
+            arm = self._memo_arm(("line", id(placement), k), joints) if released else None
+            add(ps, qs, ph.name, False, ph.holding, arm)
             here = (ps[-1], qs[-1])
             if not released:  # after the release the hand backs away in free space:
                 hold(p.settle_time, ph.name, ph.holding)  # the arm's settling is moot
             k += 1
-        if stow is not None and len(stow[0]):  # the hand follows the stow out of the way
+        rest = 0
+        if stow is not None and len(stow.pos):  # the hand follows the stow out of the way
             tol = p.free_tolerance
-            add(stow[0], stow[1], "stow", False, ends_holding(plan))
-            here = (stow[0][-1], stow[1][-1])
+            add(stow.pos, stow.quat, "stow", False, ends_holding(plan), stow.arm)
+            here = (stow.pos[-1], stow.quat[-1])
+            rest = stow.rest
         cat = np.concatenate
-        coast = max(1, round(COAST_TIME / dt)) if released else 0
+        # The cabinet settles while the full robot's stow goes on out of its way.
+        coast = max(1, round(COAST_TIME / dt)) + rest if released else 0
         return Program(plan, placement, cat(pos), cat(quat), cat(grips), cat(names), cat(held),
-                       cat(holds), cat(tols), start, coast)  # fmt: skip
+                       cat(holds), cat(tols), start, coast, cat(arms))  # fmt: skip
+
+    def _parked_arm(self) -> np.ndarray:
+        """The arm links' poses (L, 7) out of the scene (:data:`ARM_PARK`)."""
+        return np.tile(np.r_[ARM_PARK, 1.0, 0.0, 0.0, 0.0], (len(ARM_LINKS), 1))
+
+    def _memo_arm(self, key: tuple, joints: np.ndarray) -> np.ndarray:
+        """The arm links' poses (n, L, 7) along ``joints`` (n, 3 + 8: base x, y, yaw,
+        then torso and arm [m, rad]), memoised by ``key``."""
+        return self.ctx.memo(("twin arm", *key), lambda: self._arm_poses(joints))  # type: ignore[return-value]
+
+    def _arm_poses(self, joints: np.ndarray) -> np.ndarray:
+        out = np.empty((len(joints), len(ARM_LINKS), 7))
+        names = (*BASE_JOINTS, *ARM_TORSO_JOINTS)
+        for i, q in enumerate(joints):
+            pos, quat = self.ctx.ik.body_poses(dict(zip(names, q.tolist(), strict=True)),
+                                               self._arm_fetch)  # fmt: skip
+            out[i, :, :3], out[i, :, 3:] = pos, quat
+        return out
 
     def _stow_commands(
         self, placement: Placement, plan_world: ManipulationWorld | None
-    ) -> tuple[np.ndarray, np.ndarray] | None:
-        """The TCP positions (n, 3) and orientations (n, 4) every step of the full
-        robot's stow after ``placement`` (:func:`~strug_manip.control.execution.
-        plan_stow`, the same plan), up to where the hand is clear of the cabinet for
-        good (:data:`STOW_CLEARANCE`); None without a planning world (a kinematic-only
-        twin) or when the stow finds no plan (the full robot would stop there, with the
-        skill's motions done)."""
+    ) -> Stow | None:
+        """The full robot's stow after ``placement`` (:func:`~strug_manip.control.
+        execution.plan_stow`, the same plan) as the twin follows it: up to where the hand
+        and the arm are clear of the cabinet for good (:data:`STOW_CLEARANCE`); None
+        without a planning world (a kinematic-only twin) or when the stow finds no plan
+        (the full robot would stop there, with the skill's motions done)."""
         pw = self._planning(plan_world)
         if pw is None:
             return None
@@ -380,14 +433,12 @@ class PlanningTwin:
         except SkillStop:
             return None
 
-    def _stow_path(
-        self, placement: Placement, pw: ManipulationWorld
-    ) -> tuple[np.ndarray, np.ndarray]:
+    def _stow_path(self, placement: Placement, pw: ManipulationWorld) -> Stow:
         stow = plan_stow(self.ctx, pw, placement, self.params, STOW_SEED)
         dt = self.world.model.opt.timestep
         base, q_end = placement.start_of(len(placement.lines))
         if not len(stow):
-            return np.zeros((0, 3)), np.zeros((0, 4))
+            return Stow(np.zeros((0, 3)), np.zeros((0, 4)), np.zeros((0, len(ARM_LINKS), 7)), 0)
         pts = timing.polyline(q_end, list(stow))
         T = timing.duration(pts, self.vmax, 0.3)
         qs = timing.samples(pts, T, dt, self.vmax)
@@ -396,10 +447,15 @@ class PlanningTwin:
             [self.ctx.ik.forward({**fixed, **dict(zip(ARM_TORSO_JOINTS, q.tolist(), strict=True))})
              for q in qs]
         )  # fmt: skip
-        near = self._near_cabinet(poses[:, :3, 3])
+        arm = self._arm_poses(np.hstack([np.repeat(base[None], len(qs), axis=0), qs]))
+        # The hand (its TCP) and the arm (its links' origins and the middles between
+        # them) near the cabinet.
+        mid = 0.5 * (arm[:, 1:, :3] + arm[:, :-1, :3])
+        points = np.concatenate([poses[:, None, :3, 3], arm[:, :, :3], mid], axis=1)
+        near = self._near_cabinet(points.reshape(-1, 3)).reshape(len(qs), -1).any(axis=1)
         n = int(np.flatnonzero(near)[-1]) + 2 if near.any() else 1
-        poses = poses[: min(n, len(poses))]
-        return poses[:, :3, 3].copy(), _quats(poses[:, :3, :3])
+        n = min(n, len(poses))
+        return Stow(poses[:n, :3, 3].copy(), _quats(poses[:n, :3, :3]), arm[:n], len(qs) - n)
 
     def _near_cabinet(self, points: np.ndarray) -> np.ndarray:
         """Which ``points`` (n, 3) lie within :data:`STOW_CLEARANCE` of the cabinet's
@@ -413,8 +469,10 @@ class PlanningTwin:
         return np.all((p > lo) & (p < hi), axis=1)
 
     def controls(self, prog: Program) -> np.ndarray:
-        """The twin's control vectors at every step of ``prog``, (nstep, nu)."""
-        return self._controls(prog.pos, prog.quat, prog.grip, prog.holds)
+        """The twin's control vectors at every step of ``prog``, (nstep, nu + 7 nmocap):
+        the actuators' controls, then the mocap bodies' positions and orientations
+        (:data:`_CONTROL`)."""
+        return self._controls(prog.pos, prog.quat, prog.grip, prog.holds, prog.arm)
 
     def recovery(self, prog: Program, state: np.ndarray) -> np.ndarray:
         """The controls (nstep, nu) of the full robot's recovery after a stop in
@@ -448,7 +506,12 @@ class PlanningTwin:
                               np.full(len(pos), grip), holds)  # fmt: skip
 
     def _controls(
-        self, pos: np.ndarray, quat: np.ndarray, grip: np.ndarray, holds: np.ndarray
+        self,
+        pos: np.ndarray,
+        quat: np.ndarray,
+        grip: np.ndarray,
+        holds: np.ndarray,
+        arm: np.ndarray | None = None,
     ) -> np.ndarray:
         dt = self.world.model.opt.timestep
         origin = pos - TCP_OFFSET * _x_axes(quat)
@@ -460,7 +523,23 @@ class PlanningTwin:
         ctrl[:, self._slide_ctrl + 1] = vel
         ctrl[:, self._rot_ctrl : self._rot_ctrl + 4] = quat
         ctrl[:, self._grip_ctrl] = grip
-        return ctrl
+        d, nm = self.world.data, self.world.model.nmocap
+        mpos = np.repeat(d.mocap_pos[None].copy(), len(origin), axis=0)
+        mquat = np.repeat(d.mocap_quat[None].copy(), len(origin), axis=0)
+        arm = np.repeat(self._parked_arm()[None], len(origin), axis=0) if arm is None else arm
+        mpos[:, self._arm_mocap] = arm[:, :, :3]
+        mquat[:, self._arm_mocap] = arm[:, :, 3:]
+        return np.hstack([ctrl, mpos.reshape(-1, 3 * nm), mquat.reshape(-1, 4 * nm)])
+
+    def park_arm(self, ctrl: np.ndarray) -> np.ndarray:
+        """Control rows (n, nu + 7 nmocap) with the arm links parked."""
+        out = ctrl.copy()
+        nu, nm = self.world.model.nu, self.world.model.nmocap
+        mpos = out[:, nu : nu + 3 * nm].reshape(-1, nm, 3)
+        mquat = out[:, nu + 3 * nm :].reshape(-1, nm, 4)
+        mpos[:, self._arm_mocap] = ARM_PARK
+        mquat[:, self._arm_mocap] = (1.0, 0.0, 0.0, 0.0)
+        return out
 
     def judge(self, prog: Program, states: np.ndarray) -> tuple[int, Status, str, str]:
         """The first step whose monitors stop the run (a lost grasp where the fingers
@@ -516,6 +595,8 @@ class PlanningTwin:
             states = np.concatenate([states[: k + 1], tail])
             k = len(states) - 1
         mujoco.mj_setState(m, w.data, states[k], _ROLLOUT_STATE)
+        w.data.mocap_pos[self._arm_mocap] = ARM_PARK  # the arm is not simulated between runs
+        w.data.mocap_quat[self._arm_mocap] = (1.0, 0.0, 0.0, 0.0)
         mujoco.mj_forward(m, w.data)
         if status is Status.OK:
             self.grip_cmd = float(prog.grip[-1])
@@ -529,6 +610,33 @@ class PlanningTwin:
         times = states[: k + 1 : every, 0] - self.t0
         return self._outcome(prog.plan, status, detail, phase, parts0, cab0, t_wall,
                              prog.placement.seconds, times, rows, physics)  # fmt: skip
+
+    def coast(self, start: np.ndarray, last: np.ndarray, budget: int) -> np.ndarray:
+        """The scene from rollout state ``start`` with the hand out of it and the arm
+        parked, the controls held at ``last`` (1, nu + 7 nmocap): :data:`COAST_TIME`,
+        then on in such spans while a cabinet joint still moves faster than
+        :data:`REST_SPEED`, up to ``budget`` steps in all (the rest of the full robot's
+        stow, during which its cabinet goes on settling); the states (n, nstate)."""
+        m = self.world.model
+        span = max(1, round(COAST_TIME / m.opt.timestep))
+        dofs = self._cabinet_dofs
+        out: list[np.ndarray] = []
+        done = 0
+        self.ghost(True)
+        try:
+            while True:
+                tl, _ = rollout.rollout(m, self.world.data, start[None],
+                                        np.repeat(last, span, axis=0)[None],
+                                        control_spec=_CONTROL)  # fmt: skip
+                out.append(tl[0])
+                done += span
+                start = tl[0][-1]
+                qvel = start[1 + m.nq : 1 + m.nq + m.nv]
+                if done >= budget or np.max(np.abs(qvel[dofs])) < REST_SPEED:
+                    break
+        finally:
+            self.ghost(False)
+        return np.concatenate(out)
 
     def ghost(self, on: bool) -> None:
         """Take the hand out of (``on``) or back into the scene's collisions."""
@@ -613,9 +721,19 @@ def arm_strength(
     ctx: ControlContext, base: np.ndarray, q: np.ndarray, whole_body: bool
 ) -> tuple[np.ndarray, float]:
     """What the Fetch's hand can exert at base + torso + arm ``q``: the force along
-    each world axis [N] (3,) and a torque [N m], ``min_j tau_j / |J_ij|`` over the torso
-    and arm joints (with ``whole_body``, the base's too), clipped to
-    :data:`FORCE_BOUNDS` and :data:`TORQUE_BOUNDS`."""
+    each world axis [N] (3,) and a torque [N m], clipped to :data:`FORCE_BOUNDS` and
+    :data:`TORQUE_BOUNDS`, over the torso and arm joints (with ``whole_body``, the
+    base's too), ``tau`` their effort limits and ``J`` the hand's Jacobian there:
+
+    - the torque: ``min_j tau_j / |J_rot,j|`` (the weakest joint, about any axis);
+    - the force along world axis ``i``: the largest ``F`` with joint torques
+      ``J_pos,i,j F + J_rot,j . M`` within every ``tau_j`` for some moment ``M`` at the
+      hand no larger than that torque about each axis (a linear programme): the fingers
+      on a handle pass a moment as well as a force, so the joints that would saturate
+      under a pure force (the shoulder's pan under a sideways pull) share the load with
+      the others. A pure force's bound (``min_j tau_j / |J_pos,i,j|``) is the fallback
+      if the programme fails.
+    """
     ik = ctx.ik
     m = ik.model
     joints = (*BASE_JOINTS, *ARM_TORSO_JOINTS) if whole_body else ARM_TORSO_JOINTS
@@ -623,23 +741,28 @@ def arm_strength(
         {**dict(zip(BASE_JOINTS, base.tolist(), strict=True)),
          **dict(zip(ARM_TORSO_JOINTS, q.tolist(), strict=True))}
     )  # fmt: skip
-    jacp, jacr = J[:3], J[3:]
-    cols, tau = [], []
-    for j in joints:
-        jid = m.joint(j).id
-        cols.append(m.jnt_dofadr[jid])
-        a = m.actuator(ACTUATORS[j]).id
-        tau.append(float(np.max(np.abs(m.actuator_forcerange[a]))))
-    tau = np.array(tau)
+    cols = [int(m.jnt_dofadr[m.joint(j).id]) for j in joints]
+    tau = np.array(
+        [float(np.max(np.abs(m.actuator_forcerange[m.actuator(ACTUATORS[j]).id]))) for j in joints]
+    )
+    jacp, jacr = J[:3, cols], J[3:, cols]
 
-    def cap(J: np.ndarray) -> np.ndarray:
-        Jc = np.abs(J[:, cols])
+    def cap(Jc: np.ndarray) -> np.ndarray:
+        a = np.abs(Jc)
         with np.errstate(divide="ignore"):
-            return np.min(np.where(Jc > 1e-6, tau / np.maximum(Jc, 1e-12), np.inf), axis=1)
+            return np.min(np.where(a > 1e-6, tau / np.maximum(a, 1e-12), np.inf), axis=1)
 
-    force = np.clip(cap(jacp), *FORCE_BOUNDS)
     torque = float(np.clip(np.min(cap(jacr)), *TORQUE_BOUNDS))
-    return force, torque
+    force = cap(jacp)
+    for i in range(3):  # variables (F, Mx, My, Mz); maximise F
+        A = np.column_stack([jacp[i], jacr.T])
+        res = linprog(
+            [-1.0, 0.0, 0.0, 0.0], A_ub=np.vstack([A, -A]), b_ub=np.r_[tau, tau],
+            bounds=[(0.0, None)] + [(-torque, torque)] * 3, method="highs",
+        )  # fmt: skip
+        if res.success:
+            force[i] = max(force[i], float(res.x[0]))
+    return np.clip(force, *FORCE_BOUNDS), torque
 
 
 def _collide(m: mujoco.MjModel, g: int) -> tuple[int, int]:
@@ -649,6 +772,13 @@ def _collide(m: mujoco.MjModel, g: int) -> tuple[int, int]:
 
 #: What a rollout's states hold (MuJoCo's full physics: time, qpos, qvel, act, ...).
 _ROLLOUT_STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
+#: What a rollout's controls set every step: the actuators' controls and the mocap
+#: bodies' poses (the believed robot base, the arm links).
+_CONTROL = int(
+    mujoco.mjtState.mjSTATE_CTRL
+    | mujoco.mjtState.mjSTATE_MOCAP_POS
+    | mujoco.mjtState.mjSTATE_MOCAP_QUAT
+)
 
 
 @dataclass(frozen=True, eq=False)
@@ -669,6 +799,8 @@ class Program:
             an approach, which is not simulated).
         coast: steps simulated after the last release with the hand out of the scene
             (the full robot backs away and stows; the cabinet settles), or 0.
+        arm: the arm links' poses at every step (position, quaternion), (nstep, L, 7):
+            along the full robot's joint path after the last release, else parked.
     """
 
     plan: SkillPlan
@@ -682,6 +814,20 @@ class Program:
     tol: np.ndarray
     start: np.ndarray
     coast: int
+    arm: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class Stow:
+    """The full robot's stow as the twin follows it, every step until the hand and the
+    arm are clear of the cabinet: TCP positions ``pos`` (n, 3) [m], orientations
+    ``quat`` (n, 4), the arm links' poses ``arm`` (n, L, 7); ``rest``: steps of the
+    stow after that (the cabinet coasts through them)."""
+
+    pos: np.ndarray
+    quat: np.ndarray
+    arm: np.ndarray
+    rest: int
 
 
 def _line_commands(
@@ -691,10 +837,11 @@ def _line_commands(
     here: tuple[np.ndarray, np.ndarray],
     vmax: np.ndarray,
     dt: float,
-) -> tuple[np.ndarray, np.ndarray]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The commanded TCP positions (n, 3) and orientations (n, 4) of line ``k`` every
     ``dt``, from ``here`` (position, quaternion), on the schedule of the arm's joint
-    path (the full robot's timing)."""
+    path (the full robot's timing), and the joints there (n, 3 + 8: base x, y, yaw,
+    then torso and arm)."""
     base0, q0 = placement.start_of(k)
     pts = timing.polyline(q0, placement.lines[k])
     limits = vmax
@@ -706,7 +853,11 @@ def _line_commands(
     ps = np.vstack([here[0][None], line.poses[:, :3, 3]])
     qs = np.vstack([here[1][None], _quats(line.poses[:, :3, :3])])
     pos = ps[seg] + frac[:, None] * (ps[seg + 1] - ps[seg])
-    return pos, _slerp(qs[seg], qs[seg + 1], frac)
+    joints = pts[seg] + frac[:, None] * (pts[seg + 1] - pts[seg])
+    if placement.base_paths[k] is None:
+        joints = np.hstack([joints, np.repeat(np.asarray(base0, float)[None], len(seg), axis=0)])
+    joints = np.hstack([joints[:, -3:], joints[:, :-3]])  # base first
+    return pos, _slerp(qs[seg], qs[seg + 1], frac), joints
 
 
 def run_batch(
@@ -746,6 +897,7 @@ def run_batch(
         t = time.perf_counter()
         states, _ = rollout.rollout(
             [tw.world.model for tw in ts], ts[0].world.data, np.array(states0), ctrl[None],
+            control_spec=_CONTROL,
         )  # fmt: skip
         physics = (time.perf_counter() - t) / len(ts)
         judged = [tw.judge(p, st) for (_, p), tw, st in zip(members, ts, states, strict=True)]
@@ -766,15 +918,13 @@ def run_batch(
             tw, k = ts[n], judged[n][0]
             start = states[n][k]
             if len(extra):  # the recovery, the hand in the scene
-                rec, _ = rollout.rollout(tw.world.model, tw.world.data, start[None], extra[None])
+                rec, _ = rollout.rollout(tw.world.model, tw.world.data, start[None], extra[None],
+                                         control_spec=_CONTROL)  # fmt: skip
                 start, tails[n] = rec[0][-1], rec[0]
-            last = extra[-1:] if len(extra) else ctrl[k : k + 1]
-            tw.ghost(True)
-            coast = max(1, round(COAST_TIME / tw.world.model.opt.timestep))
-            tl, _ = rollout.rollout(tw.world.model, tw.world.data, start[None],
-                                    np.repeat(last, coast, axis=0)[None])  # fmt: skip
-            tw.ghost(False)
-            tails[n] = np.concatenate([tails[n], tl[0]]) if n in tails else tl[0]
+            last = tw.park_arm(extra[-1:] if len(extra) else ctrl[k : k + 1])
+            budget = prog.coast if judged[n][1] is Status.OK else 0
+            tl = tw.coast(start, last, budget)
+            tails[n] = np.concatenate([tails[n], tl]) if n in tails else tl
         physics += (time.perf_counter() - t) / len(ts)
         for n, ((i, p), tw, st) in enumerate(zip(members, ts, states, strict=True)):
             outs[i] = tw.finish(p, st, judged[n], tails.get(n), tw._t_wall, physics)

@@ -11,7 +11,12 @@ the world axes and a ball joint at the palm, and drives it like an arm would:
   joints can push along that axis at the grasp (:mod:`strug_manip.control.twin`);
 - **rotation**: a geodesic orientation servo on the ball joint (MuJoCo's SO3 actuator,
   quaternion target, :data:`ROTATION_KP`), its torque norm limited likewise;
-- every body is gravity compensated, as the Fetch's arm is.
+- every body is gravity compensated, as the Fetch's arm is;
+- the Fetch's arm links (:data:`ARM_LINKS`, their collision meshes) as mocap bodies: the
+  twin moves them along the full robot's joint path where the arm moves freely (after
+  the last release: the retreat and the stow), where a forearm can knock an open door
+  or push a drawer back in; elsewhere they are parked out of the scene
+  (:data:`ARM_PARK`).
 
 A mocap body ``robot_base`` (no geometry) stands where the full robot's base is
 believed to be: its pose is part of the simulation state, so a snapshot of the twin
@@ -54,6 +59,21 @@ CARRIER_MASS = 0.1
 FINGER_ARMATURE = 0.5
 #: Where the gripper waits, out of the way, until a skill places it [m].
 PARK = (0.0, 0.0, 1.6)
+#: The Fetch's arm links (shoulder to wrist) the twin carries as mocap bodies, named as
+#: in ``fetch.xml``; the hand (``gripper_link``) is the floating gripper itself.
+ARM_LINKS: tuple[str, ...] = (
+    "shoulder_pan_link",
+    "shoulder_lift_link",
+    "upperarm_roll_link",
+    "elbow_flex_link",
+    "forearm_roll_link",
+    "wrist_flex_link",
+    "wrist_roll_link",
+)
+#: Where the arm links wait when the arm is not simulated [m]: above everything (mocap
+#: bodies never touch each other or the world's geoms, only the cabinet, the object and
+#: the hand, which never rise there).
+ARM_PARK = (0.0, 0.0, 10.0)
 
 
 def add_floating_gripper(spec: mujoco.MjSpec) -> None:
@@ -85,9 +105,10 @@ def add_floating_gripper(spec: mujoco.MjSpec) -> None:
     for finger in ("r_gripper_finger_joint", "l_gripper_finger_joint"):
         spec.joint(finger).armature = FINGER_ARMATURE
     hand.add_joint(name=BALL, type=mujoco.mjtJoint.mjJNT_BALL, damping=0.05)
-    for mesh in list(spec.meshes):  # the attach brings every Fetch mesh; keep the palm's
-        if mesh.name != "gripper_link":
+    for mesh in list(spec.meshes):  # the attach brings every Fetch mesh; keep the hand's
+        if mesh.name not in ("gripper_link", *ARM_LINKS):  # and the arm's
             spec.delete(mesh)
+    _add_arm(spec, src)
     for name in SLIDES:
         act = spec.add_actuator(name=name, target=name, trntype=mujoco.mjtTrn.mjTRN_JOINT)
         ki = TRANSLATION_KP / INTEGRAL_TIME
@@ -102,3 +123,22 @@ def add_floating_gripper(spec: mujoco.MjSpec) -> None:
     rot.forcerange = [0.0, DEFAULT_TORQUE]
     base = spec.worldbody.add_body(name="robot_base", mocap=True)
     base.add_site(name="robot_base", size=[0.02, 0.02, 0.02], group=5)
+
+
+def _add_arm(spec: mujoco.MjSpec, src: mujoco.MjSpec) -> None:
+    """The arm links of ``src`` (the Fetch) as mocap bodies of ``spec`` with their
+    collision geoms; the wrist's links never touch the hand (adjacent on the robot)."""
+    for link in ARM_LINKS:
+        body = spec.worldbody.add_body(name=link, mocap=True, pos=list(ARM_PARK))
+        for g in src.body(link).geoms:
+            if g.contype == 0 and g.conaffinity == 0:
+                continue  # visual only
+            body.add_geom(
+                type=g.type, meshname=g.meshname, size=list(g.size), pos=list(g.pos),
+                quat=list(g.quat), contype=g.contype, conaffinity=g.conaffinity,
+                condim=g.condim, friction=list(g.friction), solref=list(g.solref),
+                solimp=list(g.solimp), group=g.group, rgba=list(g.rgba),
+            )  # fmt: skip
+    for link in ("wrist_flex_link", "wrist_roll_link"):
+        for hand in ("gripper_link", "r_gripper_finger_link", "l_gripper_finger_link"):
+            spec.add_exclude(bodyname1=link, bodyname2=hand)
