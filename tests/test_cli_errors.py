@@ -58,15 +58,21 @@ ERROR_CASES = {
     "--particles 0": ([*RUN, "--particles", "0"], "--particles"),
     "--seed -1": ([*RUN, "--seed", "-1"], "--seed"),
     "bench --workers 0": ([*BENCH, "--out", "{d}/w", "--workers", "0"], "--workers"),
-    "bench --seeds 0": (["bench", "--domains", "tiger", "--solvers", "random", "--seeds", "0",
-                         "--out", "{d}/s"], "--seeds"),  # fmt: skip
+    "bench --seeds 0": (
+        ["bench", "--domains", "tiger", "--solvers", "random", "--seeds", "0", "--out", "{d}/s"],
+        "--seeds",
+    ),
     "missing --solver": (["run", "--domain", "tiger"], "--solver"),
     "unknown command": (["frobnicate"], "invalid choice"),
     "unknown domain": (["run", "--domain", "nope", "--solver", "random"], "package.module:Class"),
-    "user domain not a class": (["run", "--domain", "os.path:join", "--solver", "random"],
-                                "not a GenerativePOMDP"),  # fmt: skip
-    "user domain no module": (["run", "--domain", "no_such_mod:X", "--solver", "random"],
-                              "cannot import"),  # fmt: skip
+    "user domain not a class": (
+        ["run", "--domain", "os.path:join", "--solver", "random"],
+        "not a GenerativePOMDP",
+    ),
+    "user domain no module": (
+        ["run", "--domain", "no_such_mod:X", "--solver", "random"],
+        "cannot import",
+    ),
     "--set without =": ([*RUN, "--set", "depth"], "NAME=VALUE"),
     "--address without ray": ([*BENCH, "--out", "{d}/a", "--address", "auto"], "--executor ray"),
 }
