@@ -8,7 +8,7 @@ Examples:
     strug bench --domains tiger,lightdark1d --solvers random,pomcp,pomcpow --seeds 100 \\
         --out runs/table1 --workers 2
     strug bench ... --executor ray                 # the same sweep as Ray tasks
-    strug run --domain mypackage.mymodule:MyPOMDP --solver pomcpow   # your own domain
+    strug run --domain my_module:MyPOMDP --solver pomcpow   # your own GenerativePOMDP
     strug scene --seed 3 --out scene.png
     strug demo
 
@@ -347,7 +347,11 @@ def _interrupted(args: argparse.Namespace) -> str:
             n = len(load_results(args.out))
         except (StrugError, OSError):
             n = 0
-        again = "rerun it with --resume" if args.command == "bench" else "run strug demo again"
+        again = (
+            "rerun the same command with --resume"
+            if args.command == "bench"
+            else "run strug demo again"
+        )
         return (
             f"interrupted: {n} finished episodes are kept in {args.out / RESULTS}; "
             f"{again} to run only the rest"

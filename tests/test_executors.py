@@ -132,3 +132,29 @@ def test_a_user_domain_by_module_and_class(tmp_path: Path) -> None:
     summary = json.loads(bench.stdout)
     # Same seeds, same dynamics: the renamed Tiger plays exactly the Tiger's episodes.
     assert summary["my_domains:SmallTiger"] == summary["tiger"]
+
+
+@pytest.mark.skipif(not Path("/proc").exists(), reason="reads /proc")
+def test_ctrl_c_stops_bench_and_its_workers_with_one_line(tmp_path: Path) -> None:
+    """SIGINT to the whole process group, as a terminal's Ctrl-C sends it."""
+    cmd = [sys.executable, "-m", "strug_manip", "bench", "--domains", "lightdark1d",
+           "--solvers", "pomcpow", "--seeds", "50", "--sims", "3000", "--out", str(tmp_path),
+           "--workers", "2", "--no-progress"]  # fmt: skip
+    proc = subprocess.Popen(
+        cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, start_new_session=True
+    )
+    results = tmp_path / "results.jsonl"
+    deadline = time.time() + 60
+    while time.time() < deadline and not (results.exists() and results.read_text()):
+        time.sleep(0.1)
+    workers = _children(proc.pid)
+    os.killpg(proc.pid, signal.SIGINT)
+    assert proc.wait(timeout=20) == 130
+    err = proc.stderr.read()
+    kept = len(load_results(tmp_path))
+    assert kept >= 1
+    assert err.strip().splitlines() == [
+        f"strug: interrupted: {kept} finished episodes are kept in {results}; "
+        "rerun the same command with --resume to run only the rest"
+    ], err
+    assert not any(_alive(w) for w in workers)

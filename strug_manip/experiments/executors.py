@@ -62,9 +62,12 @@ def run_local(
                 else:
                     sel.unregister(proc.stdout)
                     busy -= 1
-    finally:
+    except BaseException:  # Ctrl-C, a failed episode: stop at once
         sel.close()
-        _stop(procs)
+        _stop(procs, grace=0.0)
+        raise
+    sel.close()
+    _stop(procs, grace=2.0)
 
 
 def _start_worker(overrides: dict[str, Any], n_particles: int) -> subprocess.Popen:
@@ -91,12 +94,12 @@ def _receive(proc: subprocess.Popen) -> dict[str, Any]:
     return reply["record"]
 
 
-def _stop(procs: list[subprocess.Popen]) -> None:
-    """End the workers: EOF on stdin ends an idle one at once; then kill what is left."""
+def _stop(procs: list[subprocess.Popen], grace: float) -> None:
+    """End the workers: EOF on stdin ends an idle one; kill what is left after ``grace`` [s]."""
     for proc in procs:
         with contextlib.suppress(OSError):
             proc.stdin.close()
-    deadline = time.monotonic() + 2.0
+    deadline = time.monotonic() + grace
     for proc in procs:
         try:
             proc.wait(max(0.0, deadline - time.monotonic()))
