@@ -106,7 +106,7 @@ def run_episode(
     *,
     n_particles: int = DEFAULT_PARTICLES,
     on_step: Callable[[StepRecord], None] | None = None,
-    recorder: Callable[[StepRecord, Any, Any, Any], None] | None = None,
+    recorder: Callable[[StepRecord, Any, Any], None] | None = None,
 ) -> EpisodeResult:
     """Run one episode of ``solver`` on ``pomdp`` until ``done`` or ``max_steps``.
 
@@ -117,7 +117,7 @@ def run_episode(
         n_particles: belief size.
         on_step: called with every step record as soon as it exists.
         recorder: called as ``recorder(record, belief after the update or None, true
-            state after the step, observation)``, e.g. a ``rerun_log.RerunRecorder``.
+            state after the step)``, e.g. a ``rerun_log.RerunRecorder``.
     """
     check_positive_int("n_particles", n_particles)
     world_rng, belief_rng, plan_rng = episode_generators(seed)
@@ -165,7 +165,7 @@ def run_episode(
         if on_step is not None:
             on_step(rec)
         if recorder is not None:
-            recorder(rec, None if done else belief, state_next, obs)
+            recorder(rec, None if done else belief, state_next)
         if done:
             break
         state = state_next

@@ -52,6 +52,9 @@ TRUE, OBS, BELIEF, CHOSEN, OTHER = (
 )
 
 
+_NUMBER = re.compile(r"[-+]?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?")
+
+
 def _path_part(name: str) -> str:
     """An entity-path-safe version of an action name."""
     return re.sub(r"[^A-Za-z0-9_-]+", "_", name).strip("_") or "action"
@@ -157,16 +160,14 @@ class RerunRecorder:
             return None
         return feats if feats.shape[1] == 2 else np.c_[feats, np.zeros(len(feats))]
 
-    def __call__(
-        self, rec: StepRecord, belief: ParticleBelief | None, state: Any, obs: Any = None
-    ) -> None:
+    def __call__(self, rec: StepRecord, belief: ParticleBelief | None, state: Any) -> None:
         """Log step ``rec``; ``belief`` is the belief after the update (None once it
-        ended), ``state`` the true state after the step, ``obs`` the raw observation."""
+        ended), ``state`` the true state after the step."""
         rr, log = self.rr, self.stream.log
         self.stream.set_time("step", sequence=rec.step)
         self._log_search(rec)
         log("log", rr.TextLog(f"{rec.action} -> {rec.observation} (r={rec.reward:+.2f})"))
-        self._log_world(state, obs, rec.observation)
+        self._log_world(state, rec.observation)
         if belief is None:
             return
         xy = self._features(belief.states)
@@ -205,7 +206,7 @@ class RerunRecorder:
             for action, b in rec.bonus.items():
                 log(f"search/bonus/{_path_part(action)}", rr.Scalars(b))
 
-    def _log_world(self, state: Any, obs: Any, obs_text: str) -> None:
+    def _log_world(self, state: Any, obs_text: str) -> None:
         rr, log = self.rr, self.stream.log
         if isinstance(self.pomdp, Tiger):
             side = state if isinstance(state, int | np.integer) else state[0]
@@ -221,9 +222,10 @@ class RerunRecorder:
         self._path.append(true_xy[0])
         log("world/true_state", rr.Points2D(true_xy, radii=0.15, colors=TRUE, labels=["true"]))
         log("world/true_path", rr.LineStrips2D([np.array(self._path)], colors=TRUE))
-        if obs is not None:
-            o = np.atleast_1d(np.asarray(obs, dtype=float))
-            point = o[:2] if o.size >= 2 else np.array([o[0], 0.0])
+        # The runner hands over the observation as formatted (3 decimals): enough to draw.
+        numbers = [float(x) for x in _NUMBER.findall(obs_text)]
+        if numbers:
+            point = numbers[:2] if len(numbers) >= 2 else [numbers[0], 0.0]
             log(
                 "world/observation",
                 rr.Points2D([point], radii=0.12, colors=OBS, labels=[f"observed {obs_text}"]),
