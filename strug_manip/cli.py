@@ -330,9 +330,10 @@ def cmd_demo(args: argparse.Namespace) -> int:
     summary = run_bench(spec, args.out, workers=args.workers, resume=True)
     print(to_markdown(summary))
     print(
-        f"wrote {args.out}/table.md, table.csv, table.png. With {DEMO_SEEDS} seeds a cell's "
-        "standard error is about 1 on the Tigers; the full table (100 seeds, 3000 sims, "
-        f"about 3 h on 2 cores):\n  {FULL_TABLE_COMMAND}"
+        f"wrote {args.out}/table.md, table.csv, table.png. {DEMO_SEEDS} seeds are a quick "
+        "look: cells move by a point or two from seed set to seed set (a Tiger cell above "
+        "the exact optimum 5.67 is such noise; see README). The full table (100 seeds, "
+        f"3000 simulations per decision, about 20 minutes on 2 cores):\n  {FULL_TABLE_COMMAND}"
     )
     return 0
 
