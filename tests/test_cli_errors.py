@@ -75,6 +75,10 @@ ERROR_CASES = {
     ),
     "--set without =": ([*RUN, "--set", "depth"], "NAME=VALUE"),
     "--address without ray": ([*BENCH, "--out", "{d}/a", "--address", "auto"], "--executor ray"),
+    "ray --address nobody": (
+        [*BENCH, "--out", "{d}/r", "--executor", "ray", "--address", "127.0.0.1:1"],
+        "Ray",  # no cluster there, or Ray not installed: one line either way
+    ),
 }
 
 

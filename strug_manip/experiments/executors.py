@@ -22,6 +22,7 @@ import json
 import os
 import selectors
 import signal
+import socket
 import subprocess
 import sys
 import threading
@@ -140,6 +141,7 @@ def run_ray(
             "object_store_memory": RAY_OBJECT_STORE,
         }
     else:
+        _check_reachable(address)
         kwargs = {"address": address}
     try:
         ray.init(log_to_driver=False, configure_logging=False, **kwargs)
@@ -156,6 +158,20 @@ def run_ray(
                 record(_ray_result(ray, ref))
     finally:
         ray.shutdown()
+
+
+def _check_reachable(address: str, timeout: float = 5.0) -> None:
+    """Fail fast on a ``HOST:PORT`` (or ``ray://HOST:PORT``) that nothing listens on:
+    Ray itself would retry for minutes. ``auto`` and other forms are left to Ray."""
+    host, sep, port = address.removeprefix("ray://").rpartition(":")
+    if not sep or not port.isdigit() or not host:
+        return
+    try:
+        socket.create_connection((host, int(port)), timeout=timeout).close()
+    except OSError as exc:
+        raise ConfigError(
+            f"--address {address}: no Ray cluster answers there ({exc.strerror or exc})"
+        ) from None
 
 
 def _ray_result(ray: Any, ref: Any) -> dict[str, Any]:
