@@ -228,7 +228,7 @@ def _show_step(rec: StepRecord, as_json: bool) -> None:
 
 def cmd_run(args: argparse.Namespace) -> int:
     if args.rerun is not None:
-        output_file(args.rerun, "--rerun")
+        output_file(args.rerun, "--rerun", (".rrd",))
     overrides = _overrides(args)
     BenchSpec((args.domain,), (args.solver,), 1, overrides, args.particles)  # validates
     pomdp = make_domain(args.domain)

@@ -45,7 +45,8 @@ RUN = ["run", "--domain", "tiger", "--solver", "random"]
 ERROR_CASES = {
     "bench --out FILE": ([*BENCH, "--out", "{d}/a_file.md"], "a_file.md is a file"),
     "bench --out FILE/sub": ([*BENCH, "--out", "{d}/a_file.md/sub"], "a_file.md is a file"),
-    "run --rerun DIR": ([*RUN, "--rerun", "{d}/a_dir"], "--rerun"),
+    "run --rerun DIR": ([*RUN, "--rerun", "{d}/a_dir"], "a_dir/out.rrd"),
+    "run --rerun x.txt": ([*RUN, "--rerun", "{d}/x.txt"], ".rrd"),
     "run --rerun FILE/x.rrd": ([*RUN, "--rerun", "{d}/a_file.md/x.rrd"], "a_file.md is a file"),
     "scene --out DIR": (["scene", "--out", "{d}/a_dir"], "is a directory"),
     "scene --out x.txt": (["scene", "--out", "{d}/x.txt"], ".png"),
