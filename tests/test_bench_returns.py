@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from planners.solvers import make_solver
-from planners.solvers.base import parse_value
+from strug_manip.cli_args import parse_value
 
 _PATH = Path(__file__).resolve().parents[1] / "tools" / "bench_returns.py"
 _spec = importlib.util.spec_from_file_location("bench_returns", _PATH)

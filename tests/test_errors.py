@@ -67,7 +67,10 @@ def test_errors_share_one_family() -> None:
     [
         (["run", "--domain", "tigre", "--solver", "pomcp"], "unknown domain 'tigre'"),
         (["run", "--domain", "tiger", "--solver", "x"], "unknown solver 'x'"),
-        (["run", "--domain", "tiger", "--solver", "pomcp", "--sims", "-2"], "sims must be"),
+        (
+            ["run", "--domain", "tiger", "--solver", "pomcp", "--sims", "-2"],
+            "argument --sims: expected an integer >= 1",
+        ),
         (["run", "--domain", "tiger", "--solver", "pomcp", "--set", "c"], "--set expects"),
         (
             ["run", "--domain", "lightdark1d", "--solver", "pomcp", "--set", "rollout=heuristic"],
@@ -79,7 +82,7 @@ def test_errors_share_one_family() -> None:
         ),
         (
             ["bench", "--domains", "tiger", "--solvers", "random", "--seeds", "0", "--out", "x"],
-            "seeds must be",
+            "argument --seeds: expected an integer >= 1",
         ),
     ],
 )

@@ -40,25 +40,53 @@ def _render_one(seed: int, views: int, out: str, empty_prob: float) -> int:
     return seed
 
 
+#: Colours of the part map: not the cabinet, the carcass, then parts 1, 2, ... (cycled).
+PALETTE = np.array(
+    [[0, 0, 0], [90, 90, 90], [230, 159, 0], [86, 180, 233], [0, 158, 115], [240, 228, 66],
+     [0, 114, 178], [213, 94, 0], [204, 121, 167], [150, 150, 250]], dtype=np.uint8,
+)  # fmt: skip
+JOINT_NAMES = ("fixed", "prismatic", "revolute")
+
+
 def _picture(out: Path, seed: int, path: Path) -> None:
-    import cv2
+    """RGB | depth | part map of the first three views of one shard, with column titles,
+    a depth colour bar [m] and a key of the part colours (semantic label, joint type)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Patch
 
     from strug_manip.world.perception_data import load_views
 
     data = load_views(shard_path(out, seed))
-    rows = []
-    palette = np.array(
-        [[0, 0, 0], [90, 90, 90], [230, 159, 0], [86, 180, 233], [0, 158, 115], [240, 228, 66],
-         [0, 114, 178], [213, 94, 0], [204, 121, 167], [150, 150, 250]], dtype=np.uint8,
-    )  # fmt: skip
-    for i in range(min(3, len(data["rgb"]))):
+    n = min(3, len(data["rgb"]))
+    fig, axes = plt.subplots(n, 3, figsize=(10.5, 2.75 * n + 1.0), squeeze=False)
+    titles = ("RGB (head camera)", "depth [m]", "part map (colour key below)")
+    for col, title in enumerate(titles):
+        axes[0][col].set_title(title, fontsize=10)
+    for i in range(n):
         depth = data["depth"][i]
         near, far = np.percentile(depth, 1), np.percentile(depth, 60)
-        d8 = (255 * np.clip((depth - near) / max(far - near, 1e-6), 0, 1)).astype(np.uint8)
-        parts = palette[(data["part_map"][i].astype(int) + 1) % len(palette)]
-        rows.append(np.concatenate([data["rgb"][i], np.stack([d8] * 3, -1), parts], axis=1))
+        axes[i][0].imshow(data["rgb"][i])
+        im = axes[i][1].imshow(depth, cmap="gray", vmin=near, vmax=far)
+        fig.colorbar(im, ax=axes[i][1], fraction=0.035, pad=0.02)
+        axes[i][2].imshow(PALETTE[(data["part_map"][i].astype(int) + 1) % len(PALETTE)])
+        axes[i][0].set_ylabel(f"view {i}", fontsize=9)
+        for ax in axes[i]:
+            ax.set_xticks([])
+            ax.set_yticks([])
+    key = [Patch(color=PALETTE[0] / 255, label="not the cabinet"),
+           Patch(color=PALETTE[1] / 255, label="carcass")]  # fmt: skip
+    for k, (label, jtype) in enumerate(zip(data["semantic"], data["joint_type"][0], strict=True)):
+        color = PALETTE[(k + 2) % len(PALETTE)] / 255
+        key.append(Patch(color=color, label=f"part {k + 1}: {label}, {JOINT_NAMES[int(jtype)]}"))
+    fig.legend(handles=key, loc="lower center", ncol=4, fontsize=8, frameon=False)
+    fig.suptitle(f"evaluation cabinet {seed}: labelled views", fontsize=11)
+    fig.tight_layout(rect=(0, 0.09, 1, 0.97))
     path.parent.mkdir(parents=True, exist_ok=True)
-    cv2.imwrite(str(path), np.concatenate(rows, axis=0)[:, :, ::-1])
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
     print(f"wrote {path}")
 
 

@@ -1,14 +1,20 @@
 """Domains: the toy POMDPs of Table I (and, later, the manipulation tasks).
 
-``make_domain(name)`` builds one by its canonical name; ``DOMAINS`` lists them.
+``make_domain(name)`` builds one by its canonical name (``DOMAINS`` lists them) or,
+for a user's own domain, by ``"package.module:Class"``: the module is imported (the
+current directory first on the import path, as ``strug`` is run from a project's
+folder), and ``Class()``, built without arguments, must be a ``GenerativePOMDP``.
 """
 
 from __future__ import annotations
 
+import importlib
+import os
+import sys
 from collections.abc import Callable
 from typing import Any
 
-from planners.errors import UnknownNameError
+from planners.errors import ConfigError, UnknownNameError
 from planners.pomdp import GenerativePOMDP
 from strug_manip.domains.lightdark import LightDark1D, LightDark2D
 from strug_manip.domains.tiger import ExtendedTiger, Tiger, TigerClassic
@@ -32,13 +38,43 @@ DOMAIN_SUMMARIES: dict[str, str] = {
 }
 
 
-def make_domain(name: str, **params: Any) -> GenerativePOMDP:
-    """The domain called ``name`` (see ``DOMAINS``), built with ``params``."""
+def is_user_domain(name: str) -> bool:
+    """True when ``name`` has the form ``package.module:Class`` (a user's own domain)."""
+    return ":" in name
+
+
+def domain_class(name: str) -> Callable[..., GenerativePOMDP]:
+    """The constructor of domain ``name``: a key of ``DOMAINS`` or ``package.module:Class``.
+
+    Raises:
+        UnknownNameError: ``name`` is neither.
+        ConfigError: the module cannot be imported, has no such class, or the class is
+            not a ``GenerativePOMDP``.
+    """
+    if not is_user_domain(name):
+        try:
+            return DOMAINS[name]
+        except KeyError:
+            raise UnknownNameError("domain", name, [*DOMAINS, "package.module:Class"]) from None
+    module_name, _, attr = name.partition(":")
+    if not module_name or not attr:
+        raise ConfigError(f"a user domain is named package.module:Class, got {name!r}")
+    if os.getcwd() not in sys.path:
+        sys.path.insert(0, os.getcwd())
     try:
-        ctor = DOMAINS[name]
-    except KeyError:
-        raise UnknownNameError("domain", name, list(DOMAINS)) from None
-    return ctor(**params)
+        module = importlib.import_module(module_name)
+    except ImportError as exc:
+        raise ConfigError(f"domain {name!r}: cannot import {module_name!r} ({exc})") from None
+    cls = getattr(module, attr, None)
+    if not (isinstance(cls, type) and issubclass(cls, GenerativePOMDP)):
+        what = "no such attribute" if cls is None else f"{cls!r} is not a GenerativePOMDP class"
+        raise ConfigError(f"domain {name!r}: {what}")
+    return cls
+
+
+def make_domain(name: str, **params: Any) -> GenerativePOMDP:
+    """The domain called ``name`` (see ``domain_class``), built with ``params``."""
+    return domain_class(name)(**params)
 
 
 __all__ = [
@@ -49,5 +85,7 @@ __all__ = [
     "LightDark2D",
     "Tiger",
     "TigerClassic",
+    "domain_class",
+    "is_user_domain",
     "make_domain",
 ]

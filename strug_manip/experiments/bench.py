@@ -1,4 +1,4 @@
-"""Table I runs: every (domain, solver, seed) episode, in worker processes, resumable.
+"""Table I runs: every (domain, solver, seed) episode, in worker processes or on Ray, resumable.
 
 Results are appended to ``OUT/results.jsonl`` one line per finished episode, written
 and fsync'ed as soon as the episode ends, so a crash or a Ctrl-C loses only the
@@ -6,6 +6,8 @@ episodes still running. ``OUT/run.json`` records the settings; ``--resume`` chec
 that they match, drops a torn last line, and runs only the missing triples, so no
 finished episode is lost or repeated. Tables (``table.md``, ``table.csv``,
 ``table.png``) are rewritten at the end from everything in ``results.jsonl``.
+Episodes run in the driver (``workers=1``), in local worker processes, or as Ray tasks
+(:mod:`strug_manip.experiments.executors`); the driver alone writes the results.
 """
 
 from __future__ import annotations
@@ -14,17 +16,15 @@ import json
 import os
 import sys
 import time
-from collections.abc import Sequence
-from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from dataclasses import dataclass, field
-from multiprocessing import get_context
 from pathlib import Path
 from typing import Any
 
 from planners.errors import ConfigError, UnknownNameError, check_positive_int
 from planners.solvers import SOLVERS, make_solver
-from strug_manip.domains import DOMAINS, make_domain
+from strug_manip.domains import domain_class, make_domain
 from strug_manip.experiments.episode import DEFAULT_PARTICLES, run_episode
+from strug_manip.experiments.executors import EXECUTORS, run_local, run_ray
 from strug_manip.experiments.table import summarize, to_markdown, write_csv, write_png
 
 RESULTS = "results.jsonl"
@@ -36,7 +36,7 @@ class BenchSpec:
     """What one bench run covers.
 
     Attributes:
-        domains: canonical domain names.
+        domains: canonical domain names, or ``package.module:Class`` for a user's own.
         solvers: canonical solver names.
         seeds: number of seeds; seeds are 0 .. seeds-1.
         overrides: solver config fields set for every solver that has them
@@ -56,8 +56,7 @@ class BenchSpec:
         if not self.solvers:
             raise ConfigError("choose at least one solver")
         for d in self.domains:
-            if d not in DOMAINS:
-                raise UnknownNameError("domain", d, list(DOMAINS))
+            domain_class(d)
         for s in self.solvers:
             if s not in SOLVERS:
                 raise UnknownNameError("solver", s, list(SOLVERS))
@@ -102,20 +101,46 @@ def run_task(task: tuple[str, str, int], overrides: dict[str, Any], n_particles:
     }
 
 
+#: The fields every line of ``results.jsonl`` has.
+RECORD_FIELDS = ("domain", "solver", "seed", "return")
+
+
 def load_results(out: Path) -> list[dict[str, Any]]:
-    """The finished records in ``out/results.jsonl``; a torn last line is dropped."""
+    """The finished records in ``out/results.jsonl``; a torn last line is dropped.
+
+    Raises:
+        ConfigError: a line before the last is not JSON, or a line is not a bench record
+            (another program's file).
+    """
     path = out / RESULTS
     if not path.exists():
         return []
     records, lines = [], path.read_text().splitlines()
     for i, line in enumerate(lines):
         try:
-            records.append(json.loads(line))
+            rec = json.loads(line)
         except json.JSONDecodeError:
             if i == len(lines) - 1:
                 break  # killed mid-write: that episode simply did not finish
             raise ConfigError(f"{path}: line {i + 1} is not JSON; the file is corrupt") from None
+        if not isinstance(rec, dict) or any(k not in rec for k in RECORD_FIELDS):
+            raise ConfigError(
+                f"{path}: line {i + 1} is not a bench episode record (fields "
+                f"{', '.join(RECORD_FIELDS)}); is this another program's file? "
+                "Choose another --out"
+            )
+        records.append(rec)
     return records
+
+
+def _load_settings(path: Path) -> Any:
+    try:
+        return json.loads(path.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise ConfigError(
+            f"--resume: {path} is not a bench run's settings (not JSON: {exc}); "
+            "remove it to adopt this run's settings, or choose another --out"
+        ) from None
 
 
 def _prepare(out: Path, spec: BenchSpec, resume: bool) -> list[dict[str, Any]]:
@@ -128,7 +153,7 @@ def _prepare(out: Path, spec: BenchSpec, resume: bool) -> list[dict[str, Any]]:
             "that run or choose another --out"
         )
     if resume and settings_path.exists():
-        old = json.loads(settings_path.read_text())
+        old = _load_settings(settings_path)
         if old != spec.settings():
             raise ConfigError(
                 f"--resume: {settings_path} was written with settings {old}, but this run asks "
@@ -149,13 +174,27 @@ def run_bench(
     workers: int = 1,
     resume: bool = False,
     progress: bool = True,
+    executor: str = "local",
+    address: str | None = None,
 ) -> dict[str, dict[str, dict[str, float]]]:
     """Run every missing episode of ``spec`` into ``out`` and write the tables.
+
+    Args:
+        spec: the sweep.
+        out: the run's directory.
+        workers: episodes at once (``local``: processes; 1 runs them in this process;
+            ``ray``: the local instance's CPUs, and the tasks in flight are ``2 * workers``).
+        resume: keep the finished episodes of ``out`` and run the rest.
+        progress: show a progress bar on stderr.
+        executor: ``"local"`` (worker processes) or ``"ray"`` (Ray tasks).
+        address: with ``"ray"``, a cluster to join; ``None`` starts Ray locally.
 
     Returns:
         ``{domain: {solver: {"mean", "stderr", "n"}}}`` over the spec's triples.
     """
     check_positive_int("workers", workers)
+    if executor not in EXECUTORS:
+        raise UnknownNameError("executor", executor, EXECUTORS)
     records = _prepare(out, spec, resume)
     wanted = spec.tasks()
     done = {(r["domain"], r["solver"], r["seed"]) for r in records}
@@ -170,30 +209,21 @@ def run_bench(
             records.append(rec)
             bar.update(1)
 
-        if workers == 1:
+        if not todo:
+            pass
+        elif executor == "ray":
+            run_ray(todo, spec.overrides, spec.n_particles, workers, record, address)
+        elif workers == 1:
             for task in todo:
                 record(run_task(task, spec.overrides, spec.n_particles))
         else:
-            _run_pool(todo, spec, workers, record)
+            run_local(todo, spec.overrides, spec.n_particles, workers, record)
     bar.close()
     wanted_set = set(wanted)
     mine = [r for r in records if (r["domain"], r["solver"], r["seed"]) in wanted_set]
     summary = summarize(mine)
     write_tables(summary, out)
     return summary
-
-
-def _run_pool(todo: Sequence[tuple[str, str, int]], spec: BenchSpec, workers: int, record) -> None:
-    # spawn: workers start clean (no inherited threads or open files), ~0.3 s each.
-    with ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn")) as pool:
-        pending: set[Future] = set()
-        queue = list(reversed(todo))
-        while queue or pending:
-            while queue and len(pending) < 2 * workers:
-                pending.add(pool.submit(run_task, queue.pop(), spec.overrides, spec.n_particles))
-            finished, pending = wait(pending, return_when=FIRST_COMPLETED)
-            for fut in finished:
-                record(fut.result())
 
 
 def write_tables(summary: dict[str, dict[str, dict[str, float]]], out: Path) -> None:

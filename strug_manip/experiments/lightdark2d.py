@@ -78,21 +78,25 @@ def wall_visits(results: Sequence[EpisodeResult]) -> WallVisits:
 
 
 def plot_trajectories(runs: dict[str, list[EpisodeResult]], path: Path) -> None:
-    """One panel per solver: the room, the goal bar, every trajectory (start o, end x)."""
+    """One panel per solver: the room, the goal bar, the lights, every trajectory; one
+    legend below the panels explains colours and markers."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
 
-    fig, axes = plt.subplots(1, len(runs), figsize=(4.2 * len(runs), 4.4), squeeze=False)
+    good, bad = "#1b7837", "#b2182b"
+    fig, axes = plt.subplots(1, len(runs), figsize=(4.2 * len(runs), 5.0), squeeze=False)
     for ax, (solver, results) in zip(axes[0], runs.items(), strict=True):
-        ax.axvspan(4.5, 5.5, color="#b7e4b0", label="goal |x-5|<0.5")
-        ax.axvspan(10 - WALL_MARGIN, 10, color="#fff2b3", alpha=0.7, label="x light")
-        ax.axhspan(10 - WALL_MARGIN, 10, color="#d6e6ff", alpha=0.7, label="y light")
+        ax.axvspan(4.5, 5.5, color="#b7e4b0")
+        ax.axvspan(10 - WALL_MARGIN, 10, color="#fff2b3", alpha=0.7)
+        ax.axhspan(10 - WALL_MARGIN, 10, color="#d6e6ff", alpha=0.7)
         for r in results:
             xs = [s[0] for s in r.trajectory]
             ys = [s[1] for s in r.trajectory]
-            color = "#1b7837" if r.discounted_return > 0 else "#b2182b"
+            color = good if r.discounted_return > 0 else bad
             ax.plot(xs, ys, "-", color=color, alpha=0.55, lw=1.2)
             ax.plot(xs[0], ys[0], "o", color=color, ms=3)
             ax.plot(xs[-1], ys[-1], "x", color=color, ms=5)
@@ -107,7 +111,25 @@ def plot_trajectories(runs: dict[str, list[EpisodeResult]], path: Path) -> None:
         ax.set_aspect("equal")
         ax.set_xlabel("x [m]")
         ax.set_ylabel("y [m]")
-    axes[0][0].legend(loc="lower left", fontsize=7)
-    fig.tight_layout()
+    handles = [
+        Patch(color="#b7e4b0", label="goal: declare at |x-5|<0.5"),
+        Patch(color="#fff2b3", label="x light (within 1 m of the right wall): precise x"),
+        Patch(color="#d6e6ff", label="y light (within 1 m of the top wall): precise y"),
+        Line2D([], [], color=good, lw=1.5, label="episode with return > 0"),
+        Line2D([], [], color=bad, lw=1.5, label="episode with return <= 0"),
+        Line2D([], [], color="0.3", marker="o", ls="", ms=4, label="true start"),
+        Line2D([], [], color="0.3", marker="x", ls="", ms=6, label="true end"),
+    ]
+    fig.legend(handles=handles, loc="lower center", ncol=4, fontsize=8, frameon=False)
+    fig.text(
+        0.5,
+        0.105,
+        "x (y) informed: episodes that entered the x (y) light or were clipped at the "
+        "left (bottom) wall, which fixes x (y) exactly",
+        ha="center",
+        fontsize=8,
+        color="0.3",
+    )
+    fig.tight_layout(rect=(0, 0.13, 1, 1))
     fig.savefig(path, dpi=110)
     plt.close(fig)
