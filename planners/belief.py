@@ -194,7 +194,8 @@ def _update_exact_match(
     min_match_fraction: float,
     resample_ess: float,
 ) -> tuple[ParticleBelief, UpdateInfo]:
-    step = pomdp.step
+    step, key_of = pomdp.step, pomdp.observation_key
+    key = key_of(o)
     # Pass 1: every particle once, in order, keeping its weight. An observation every
     # particle explains (Tiger's "nothing") then leaves the belief exactly as it was,
     # instead of adding multinomial resampling noise at every step.
@@ -206,7 +207,7 @@ def _update_exact_match(
         s_next, o_sim, _, _ = step(s, a, rng)
         proposed.append(s_next)
         proposed_origin.append(org)
-        if o_sim == o:
+        if key_of(o_sim) == key:
             kept.append(s_next)
             kept_w.append(w)
             kept_origin.append(org)
@@ -218,7 +219,7 @@ def _update_exact_match(
         for i in belief.sample_indices(rng, min(budget - draws, n)).tolist():
             s_next, o_sim, _, _ = step(belief.states[i], a, rng)
             draws += 1
-            if o_sim == o:
+            if key_of(o_sim) == key:
                 extra.append(s_next)
                 extra_origin.append(int(belief.origin[i]))
     matched = len(kept) + len(extra)

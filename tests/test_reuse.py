@@ -34,6 +34,7 @@ class RevealTiger(GenerativePOMDP):
     discount = 0.95
     max_steps = 10
     max_abs_reward = 10.0
+    discrete_observations = True
 
     def action_space(self) -> ActionSpace:
         return make_domain("tiger").action_space()

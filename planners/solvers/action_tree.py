@@ -22,7 +22,9 @@ normalised over the node's visited children; unvisited children are tried first,
 order. A child marked *solved* (:meth:`ActionTree.mark_solved`) competes with its value
 alone, without the exploration term: its value is known exactly, so visiting it again
 cannot teach anything (MCTS-Solver, Winands, Bjornsson & Saito 2008). Storage is flat
-lists indexed by node id.
+lists indexed by node id; every action node also holds the list of observation
+children (belief-node ids, with repeats) its solver generated under it, so a search
+keeps no per-node list of its own parallel to the tree's.
 """
 
 from __future__ import annotations
@@ -33,7 +35,7 @@ import numpy as np
 
 from planners.errors import ConfigError, check_positive_float
 from planners.pomdp import ActionSpace
-from planners.solvers.exploration import ucb_select
+from planners.solvers.exploration import best_index, ucb_select
 
 WIDENING_MODES = ("auto", "all", "dpw", "hpw")
 
@@ -61,6 +63,9 @@ class ActionTree:
         a_q: value estimate per action node.
         a_action: the action of each action node.
         a_solved: per action node, True once its value is known exactly.
+        a_children: per action node, the belief-node ids of the observation children
+            generated under it, in order and with repeats (filled by the solver: a
+            uniform pick from it is a pick in proportion to how often each came up).
         b_children: action-node ids per belief node (all schemas).
     """
 
@@ -86,6 +91,7 @@ class ActionTree:
         self.a_q: list[float] = []
         self.a_action: list[Hashable] = []
         self.a_solved: list[bool] = []
+        self.a_children: list[list[int]] = []
         self.b_children: list[list[int]] = []
         self._lookup: dict[tuple[int, Hashable], int] = {}
         # HPW: schema nodes (one per belief node and schema), contiguous per belief node.
@@ -96,10 +102,11 @@ class ActionTree:
         self.s_owner: list[int] = []
         self.b_schema_first: list[int] = []
 
-    def add_belief_node(self) -> None:
-        """Register the next belief node id (call once per belief node, in id order)."""
+    def add_belief_node(self) -> int:
+        """Register the next belief node (call once per belief node); returns its id."""
         self.b_children.append([])
         self.b_schema_first.append(-1)
+        return len(self.b_children) - 1
 
     def _add_action(self, h: int, a: Hashable) -> int:
         key = (h, a)
@@ -111,6 +118,7 @@ class ActionTree:
             self.a_q.append(0.0)
             self.a_action.append(a)
             self.a_solved.append(False)
+            self.a_children.append([])
         return node
 
     def mark_solved(self, anode: int, snode: int = -1) -> None:
@@ -203,9 +211,8 @@ class ActionTree:
     def best_root_action(self) -> Hashable | None:
         """The visited root action with the highest value (None if nothing was visited)."""
         actions, q, visits = self.root_stats()
-        if not actions or not np.any(visits > 0):
-            return None
-        return actions[int(np.argmax(np.where(visits > 0, q, -np.inf)))]
+        i = best_index(q, visits)
+        return None if i is None else actions[i]
 
     def size(self) -> int:
         """Number of action nodes."""

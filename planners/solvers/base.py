@@ -39,6 +39,11 @@ class SearchInfo:
         q: value estimate per root action, shape ``(len(actions),)``.
         visits: visit count per root action, shape ``(len(actions),)``.
         extra: solver-specific figures (e.g. TRU at the root, ΔTRU per action).
+        tree: the whole search tree, only when the config asked for it
+            (``keep_tree=True``; None otherwise): a
+            :class:`planners.solvers.belief_tree.BeliefTreeSearch` (STRUG, Entropy,
+            Active Learning), a :class:`planners.solvers.pomcpow.POMCPOWTree` or a
+            :class:`planners.solvers.pomcp.POMCPTree`.
     """
 
     sims: int = 0
@@ -48,6 +53,7 @@ class SearchInfo:
     q: np.ndarray = field(default_factory=lambda: np.zeros(0))
     visits: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     extra: dict[str, Any] = field(default_factory=dict)
+    tree: Any = field(default=None, repr=False)
 
     @property
     def sims_per_second(self) -> float:
@@ -138,6 +144,8 @@ class TreeSearchConfig(SolverConfig):
             planner then serves one episode). On the classic Tiger the best
             receding-horizon policy is worth 6.11, the finite-horizon optimum 6.69: near
             the end, listening before a door stops paying.
+        keep_tree: return the search tree in ``SearchInfo.tree`` (default False: it is
+            dropped after the decision, so long episodes do not hold every tree).
     """
 
     depth: int | None = None
@@ -146,9 +154,12 @@ class TreeSearchConfig(SolverConfig):
     exploration: str = "fixed"
     c_normalized: float = 1.0
     horizon: str = "receding"
+    keep_tree: bool = False
 
     def __post_init__(self) -> None:
         super().__post_init__()
+        if not isinstance(self.keep_tree, bool):
+            raise ConfigError(f"keep_tree must be true or false, got {self.keep_tree!r}")
         if self.depth is not None:
             check_positive_int("depth", self.depth)
         if self.c is not None:

@@ -29,6 +29,7 @@ import numpy as np
 
 from planners.belief import ParticleBelief
 from planners.errors import check_positive_float
+from planners.pomdp import GenerativePOMDP, check_pomdp
 from planners.solvers.base import (
     Budget,
     RootSampler,
@@ -36,7 +37,7 @@ from planners.solvers.base import (
     TreeSearchConfig,
     UniformStream,
 )
-from planners.solvers.exploration import ucb_select
+from planners.solvers.exploration import best_index, ucb_select
 from planners.solvers.reuse import check_reuse, particle_disagreement
 from planners.solvers.rollout import check_rollout, domain_policy, make_rollout
 
@@ -78,22 +79,29 @@ class POMCPConfig(TreeSearchConfig):
         check_rollout(self.rollout)
         check_reuse(self.reuse_tree, self.reuse_tolerance)
 
-    def planner(self, pomdp: Any) -> POMCPPlanner:
+    def planner(self, pomdp: GenerativePOMDP) -> POMCPPlanner:
         return POMCPPlanner(self, pomdp)
 
 
-def observation_key(pomdp: Any, obs_bin: float) -> Callable[[Any], Hashable] | None:
-    """The function mapping observations to tree keys (None: use them as they are)."""
+def observation_bins(pomdp: GenerativePOMDP, obs_bin: float) -> Callable[[Any], Hashable]:
+    """The function mapping observations to tree keys: the domain's
+    ``observation_key`` with discrete observations, else that key binned on a grid of
+    width ``obs_bin`` per dimension (the key must then be a number or a flat tuple of
+    numbers, as the default key of a 1-d numpy array is after its shape)."""
+    key_of = pomdp.observation_key
     if pomdp.discrete_observations:
-        return None
+        return key_of
     inv = 1.0 / obs_bin
 
-    def key(o: Any) -> Hashable:
-        if isinstance(o, tuple | list | np.ndarray):
-            return tuple(math.floor(x * inv) for x in o)
-        return math.floor(o * inv)
+    def binned(o: Any) -> Hashable:
+        k = key_of(o)
+        if isinstance(o, np.ndarray):  # the default key: (shape, values)
+            k = k[1]  # type: ignore[index]
+        if isinstance(k, tuple):
+            return tuple(math.floor(x * inv) for x in k)
+        return math.floor(k * inv)  # type: ignore[operator]
 
-    return key
+    return binned
 
 
 @dataclass
@@ -163,12 +171,13 @@ class POMCPTree:
 class POMCPPlanner:
     """A POMCP search; with ``reuse_tree`` it keeps its tree between decisions."""
 
-    def __init__(self, config: POMCPConfig, pomdp: Any) -> None:
+    def __init__(self, config: POMCPConfig, pomdp: GenerativePOMDP) -> None:
+        check_pomdp(pomdp)
         self.config = config
         self.pomdp = pomdp
         self.actions = list(pomdp.action_space().discretized)
         self.depth, self.c, self.gamma = config.resolved(pomdp)
-        self.obs_key = observation_key(pomdp, config.obs_bin)
+        self.obs_key = observation_bins(pomdp, config.obs_bin)
         if config.rollout == "heuristic":
             domain_policy(pomdp)  # a domain without one fails here, not mid-episode
         self._tree: POMCPTree | None = None
@@ -179,7 +188,7 @@ class POMCPPlanner:
         """Record the executed action and the real observation (``reuse_tree``, ``horizon``)."""
         self.steps_taken += 1
         if self.config.reuse_tree and action in self.actions:
-            key = observation if self.obs_key is None else self.obs_key(observation)
+            key = self.obs_key(observation)
             self._executed = (self.actions.index(action), key)
 
     def _start_tree(self, belief: ParticleBelief) -> tuple[POMCPTree, float]:
@@ -228,7 +237,7 @@ class POMCPPlanner:
             if done or d + 1 >= depth:
                 total = r
             else:
-                key = (ai, o if obs_key is None else obs_key(o))
+                key = (ai, obs_key(o))
                 h2 = children.get(key)
                 if particles is not None and d == 0:
                     particles.setdefault(len(b_n) if h2 is None else h2, []).append(s2)
@@ -257,7 +266,7 @@ class POMCPPlanner:
         else:
             q = np.array(a_q[first : first + n_actions])
             visits = np.array(a_n[first : first + n_actions], dtype=np.int64)
-        best = _best_root_action(q, visits)
+        best = best_index(q, visits) or 0
         if cfg.reuse_tree:
             self._tree = tree
         info = SearchInfo(
@@ -268,12 +277,6 @@ class POMCPPlanner:
             q=q,
             visits=visits,
             extra={"reused_visits": reused, "reuse_disagreement": gap} if cfg.reuse_tree else {},
+            tree=tree if cfg.keep_tree else None,
         )
         return actions[best], info
-
-
-def _best_root_action(q: np.ndarray, visits: np.ndarray) -> int:
-    """Index of the visited root action with the highest value (ties: the first)."""
-    if not np.any(visits > 0):
-        return 0
-    return int(np.argmax(np.where(visits > 0, q, -np.inf)))
