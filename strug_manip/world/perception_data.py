@@ -363,4 +363,3 @@ def load_views(path: Path) -> dict[str, np.ndarray]:
     """The arrays of one shard (leading axis: view), as written by :func:`save_views`."""
     with np.load(path) as data:
         return {k: data[k] for k in data.files}
-
