@@ -314,12 +314,15 @@ class GenerativePOMDP(ABC):
         The search trees file observation children under it (POMCP's observation bins,
         POMCPOW's and the belief tree's children) and the exact-match belief update
         compares with it, so observations may be unhashable values such as numpy
-        arrays. Default: a numpy array becomes ``(shape, values as a tuple)``, a list a
-        tuple, and anything else is its own key.
+        arrays. Default: a numpy array of at most one dimension becomes the tuple of its
+        values, a higher-dimensional one ``(shape, values)``, a list a tuple, and
+        anything else is its own key. (POMCP bins the key on continuous-observation
+        domains, so there it must be a number or a flat tuple of numbers.)
         """
         cls = o.__class__
         if cls is np.ndarray:
-            return (o.shape, tuple(o.ravel().tolist()))
+            values = tuple(o.ravel().tolist())
+            return values if o.ndim <= 1 else (o.shape, values)
         if cls is list:
             return tuple(o)
         return o

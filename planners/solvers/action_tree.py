@@ -102,6 +102,24 @@ class ActionTree:
         self.s_owner: list[int] = []
         self.b_schema_first: list[int] = []
 
+    def empty_like(self) -> ActionTree:
+        """A tree without nodes and with this one's settings (a kept subtree's new home)."""
+        return ActionTree(
+            self.space, self.mode, self.k, self.alpha, self.c, self.rng, self.u, self.normalized
+        )
+
+    def expand_all(self, h: int) -> list[int]:
+        """Make every action of the finite action set a child of ``h`` (which has none
+        yet); returns its children. The actions are distinct, so no lookup is needed."""
+        n, k = len(self.a_n), len(self.actions)
+        self.b_children[h].extend(range(n, n + k))
+        self.a_n.extend([0] * k)
+        self.a_q.extend([0.0] * k)
+        self.a_action.extend(self.actions)
+        self.a_solved.extend([False] * k)
+        self.a_children.extend([] for _ in range(k))
+        return self.b_children[h]
+
     def add_belief_node(self) -> int:
         """Register the next belief node (call once per belief node); returns its id."""
         self.b_children.append([])
@@ -146,11 +164,12 @@ class ActionTree:
             n_h: its visit count N(h) before this simulation.
         """
         children = self.b_children[h]
-        if self.mode == "all":
+        if self.mode == "all":  # the hot path of POMCP: one call, no detour
             if not children:
-                for a in self.actions:
-                    self._add_action(h, a)
-            return self._ucb(children, n_h), -1
+                self.expand_all(h)
+            return ucb_select(
+                children, self.a_q, self.a_n, n_h, self.c, self.normalized, self.a_solved
+            ), -1
         if self.mode == "dpw":
             if len(children) <= self.k * n_h**self.alpha:
                 self._add_action(h, self.space.sample(self.rng))
