@@ -32,11 +32,14 @@ from __future__ import annotations
 
 from collections.abc import Hashable, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from planners.errors import BeliefError, check_positive_float, check_positive_int
+
+if TYPE_CHECKING:
+    from planners.pomdp import GenerativePOMDP
 
 #: Origin index of a particle that has no initial ancestor (created by reinvigoration).
 NO_ORIGIN = -1
@@ -142,7 +145,7 @@ class UpdateInfo:
 
 
 def update_belief(
-    pomdp: Any,
+    pomdp: GenerativePOMDP,
     belief: ParticleBelief,
     a: Hashable,
     o: Any,
@@ -184,7 +187,7 @@ def update_belief(
 
 
 def _update_exact_match(
-    pomdp: Any,
+    pomdp: GenerativePOMDP,
     belief: ParticleBelief,
     a: Hashable,
     o: Any,
@@ -246,7 +249,7 @@ def _update_exact_match(
 
 
 def _update_likelihood(
-    pomdp: Any,
+    pomdp: GenerativePOMDP,
     belief: ParticleBelief,
     a: Hashable,
     o: Any,
@@ -264,7 +267,7 @@ def _update_likelihood(
 
 
 def _weighted(
-    pomdp: Any,
+    pomdp: GenerativePOMDP,
     states: list[Any],
     origin: np.ndarray,
     logw: np.ndarray,

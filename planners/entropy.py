@@ -17,9 +17,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from planners.pomdp import GenerativePOMDP
 
 #: Variance floor per dimension of the Gaussian estimate [state units^2].
 MIN_VARIANCE = 1e-4
@@ -51,7 +54,7 @@ def particle_entropy(
     return 0.5 * float(logdet)
 
 
-def state_entropy(pomdp: Any, states: Sequence[Any], weights: np.ndarray) -> float:
+def state_entropy(pomdp: GenerativePOMDP, states: Sequence[Any], weights: np.ndarray) -> float:
     """Entropy [nats] of ``pomdp``'s particles ``states`` with ``weights`` (shape ``(N,)``):
     categorical when ``pomdp.discrete_states(states)``, else the Gaussian estimate of
     ``pomdp.entropy_features(states)``."""

@@ -35,11 +35,14 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Hashable, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from planners.errors import BeliefError, ConfigError, check_positive_int
+
+if TYPE_CHECKING:
+    from planners.pomdp import GenerativePOMDP
 
 Plan = Sequence[Hashable]
 
@@ -91,7 +94,7 @@ class CompatibilityMatrix:
 
 
 def execute_plan(
-    pomdp: Any, s: Any, plan: Plan, rng: np.random.Generator, discount: float
+    pomdp: GenerativePOMDP, s: Any, plan: Plan, rng: np.random.Generator, discount: float
 ) -> tuple[float, int]:
     """Discounted return of the open-loop ``plan`` from ``s``, and the steps it took."""
     total, disc, steps = 0.0, 1.0, 0
@@ -107,7 +110,7 @@ def execute_plan(
 
 
 def compatibility_matrix(
-    pomdp: Any,
+    pomdp: GenerativePOMDP,
     states: Sequence[Any],
     repeats: int,
     rng: np.random.Generator,

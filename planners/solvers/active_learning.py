@@ -61,7 +61,7 @@ class ActiveLearningConfig(BeliefTreeConfig):
         return ActiveLearningPlanner(self, pomdp)
 
 
-def most_likely_state(pomdp: Any, belief: ParticleBelief) -> Any:
+def most_likely_state(pomdp: GenerativePOMDP, belief: ParticleBelief) -> Any:
     """The mode (discrete states) or the particle nearest the weighted mean (continuous)."""
     if pomdp.discrete_states(belief.states):
         mass: dict[Any, float] = {}

@@ -18,13 +18,16 @@ import math
 import time
 from collections.abc import Hashable
 from dataclasses import dataclass, field
-from typing import Any, ClassVar, Protocol
+from typing import TYPE_CHECKING, Any, ClassVar, Protocol
 
 import numpy as np
 
 from planners.belief import ParticleBelief
 from planners.errors import ConfigError, UnknownNameError, check_positive_float, check_positive_int
 from planners.solvers.exploration import check_exploration
+
+if TYPE_CHECKING:
+    from planners.pomdp import GenerativePOMDP
 
 
 @dataclass
@@ -98,7 +101,7 @@ class SolverConfig:
         if self.time_limit is not None:
             check_positive_float("time_limit", self.time_limit)
 
-    def planner(self, pomdp: Any) -> Planner:
+    def planner(self, pomdp: GenerativePOMDP) -> Planner:
         """Build the planner for ``pomdp``."""
         raise NotImplementedError
 
@@ -175,7 +178,7 @@ class TreeSearchConfig(SolverConfig):
         """True when the UCB value term is normalised (``exploration="normalized"``)."""
         return self.exploration == "normalized"
 
-    def resolved(self, pomdp: Any) -> tuple[int, float, float]:
+    def resolved(self, pomdp: GenerativePOMDP) -> tuple[int, float, float]:
         """``(depth, c, discount)`` with the domain's defaults filled in.
 
         ``c`` is the constant of the chosen ``exploration``: ``c`` (reward units) when
@@ -189,7 +192,7 @@ class TreeSearchConfig(SolverConfig):
         gamma = self.discount if self.discount is not None else float(pomdp.discount)
         return depth, c, gamma
 
-    def search_depth(self, pomdp: Any, steps_taken: int) -> int:
+    def search_depth(self, pomdp: GenerativePOMDP, steps_taken: int) -> int:
         """The depth of the decision after ``steps_taken`` real steps (see ``horizon``)."""
         depth = self.depth if self.depth is not None else int(pomdp.max_steps)
         if self.horizon == "episode":

@@ -30,7 +30,7 @@ from planners.solvers.belief_tree import (
 )
 
 
-def entropy_value(pomdp: Any) -> NodeValue:
+def entropy_value(pomdp: GenerativePOMDP) -> NodeValue:
     """The node value ``H(b)`` [nats] for ``pomdp``'s states."""
 
     def value(states: list[Any], w: np.ndarray) -> float:

@@ -32,12 +32,15 @@ compatibility matrix is built over them), which the runner's next belief resampl
 from __future__ import annotations
 
 from collections.abc import Hashable, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from planners.belief import ParticleBelief
 from planners.errors import ConfigError, check_positive_float
+
+if TYPE_CHECKING:
+    from planners.pomdp import GenerativePOMDP
 
 #: Bins per dimension when continuous states are compared (quartiles of the belief).
 CONTINUOUS_BINS = 4
@@ -50,7 +53,9 @@ def check_reuse(reuse_tree: object, reuse_tolerance: float) -> None:
     check_positive_float("reuse_tolerance", reuse_tolerance, allow_zero=True, upper=1.0)
 
 
-def particle_disagreement(pomdp: Any, states: Sequence[Any], belief: ParticleBelief) -> float:
+def particle_disagreement(
+    pomdp: GenerativePOMDP, states: Sequence[Any], belief: ParticleBelief
+) -> float:
     """Total-variation distance in [0, 1] between equally weighted ``states`` and ``belief``.
 
     Discrete states (``pomdp.discrete_states``) are compared state by state.

@@ -73,21 +73,19 @@ def plan_return(
     return total
 
 
-def domain_policy(pomdp: Any) -> RolloutPolicy:
+def domain_policy(pomdp: GenerativePOMDP) -> RolloutPolicy:
     """``pomdp``'s rollout heuristic, or a :class:`ConfigError` naming the domain."""
-    getter = getattr(pomdp, "rollout_policy", None)
-    policy = getter() if getter is not None else None
+    policy = pomdp.rollout_policy()
     if policy is None:
-        name = getattr(pomdp, "name", type(pomdp).__name__)
         raise ConfigError(
-            f"rollout='heuristic' needs a domain rollout policy, but {name} has none "
+            f"rollout='heuristic' needs a domain rollout policy, but {pomdp.name} has none "
             "(rollout_policy() returned None); use rollout='random'"
         )
     return policy
 
 
 def make_rollout(
-    pomdp: Any,
+    pomdp: GenerativePOMDP,
     kind: str,
     actions: Sequence[Hashable] | None,
     space: ActionSpace,
