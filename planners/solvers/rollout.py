@@ -29,6 +29,7 @@ import numpy as np
 
 from planners.errors import ConfigError
 from planners.pomdp import ActionSpace, GenerativePOMDP, RolloutPolicy, provides_plan
+from planners.tru import execute_plan
 
 #: Rollout kinds every tree solver offers.
 ROLLOUTS = ("random", "heuristic")
@@ -61,16 +62,9 @@ def plan_return(
     rng: np.random.Generator,
 ) -> float:
     """Discounted return of the open-loop ``plan`` executed from ``s`` over the steps
-    ``d .. depth-1`` (the plan is cut there), stopping at a terminal step."""
-    step = pomdp.step
-    total, disc = 0.0, 1.0
-    for a in plan[: depth - d]:
-        s, _, r, done = step(s, a, rng)
-        total += disc * r
-        if done:
-            break
-        disc *= gamma
-    return total
+    ``d .. depth-1`` (the plan is cut there), stopping at a terminal step
+    (:func:`planners.tru.execute_plan`, the loop TRU's matrix runs too)."""
+    return execute_plan(pomdp, s, plan[: depth - d], rng, gamma)[0]
 
 
 def domain_policy(pomdp: GenerativePOMDP) -> RolloutPolicy:
