@@ -67,6 +67,8 @@ class ActionTree:
             generated under it, in order and with repeats (filled by the solver: a
             uniform pick from it is a pick in proportion to how often each came up).
         b_children: action-node ids per belief node (all schemas).
+        b_schema_first: HPW only: the first schema node of each belief node (-1 until
+            its first selection).
     """
 
     def __init__(
@@ -93,6 +95,8 @@ class ActionTree:
         self.a_solved: list[bool] = []
         self.a_children: list[list[int]] = []
         self.b_children: list[list[int]] = []
+        # What UCB reads as "solved": None until a node is solved (no per-child test).
+        self._solved: list[bool] | None = None
         self._lookup: dict[tuple[int, Hashable], int] = {}
         # HPW: schema nodes (one per belief node and schema), contiguous per belief node.
         self.s_n: list[int] = []
@@ -117,13 +121,14 @@ class ActionTree:
         self.a_q.extend([0.0] * k)
         self.a_action.extend(self.actions)
         self.a_solved.extend([False] * k)
-        self.a_children.extend([] for _ in range(k))
+        self.a_children.extend([[] for _ in range(k)])
         return self.b_children[h]
 
     def add_belief_node(self) -> int:
         """Register the next belief node (call once per belief node); returns its id."""
         self.b_children.append([])
-        self.b_schema_first.append(-1)
+        if self.mode == "hpw":
+            self.b_schema_first.append(-1)
         return len(self.b_children) - 1
 
     def _add_action(self, h: int, a: Hashable) -> int:
@@ -146,6 +151,7 @@ class ActionTree:
         that action node is then the schema's only child.
         """
         self.a_solved[anode] = True
+        self._solved = self.a_solved
         if snode >= 0:
             first = self.b_schema_first[self.s_owner[snode]]
             if self.space.schemas[snode - first].dim == 0:
@@ -153,7 +159,7 @@ class ActionTree:
 
     def _ucb(self, children: list[int], n_parent: int) -> int:
         return ucb_select(
-            children, self.a_q, self.a_n, n_parent, self.c, self.normalized, self.a_solved
+            children, self.a_q, self.a_n, n_parent, self.c, self.normalized, self._solved
         )
 
     def select(self, h: int, n_h: int) -> tuple[int, int]:
@@ -168,7 +174,7 @@ class ActionTree:
             if not children:
                 self.expand_all(h)
             return ucb_select(
-                children, self.a_q, self.a_n, n_h, self.c, self.normalized, self.a_solved
+                children, self.a_q, self.a_n, n_h, self.c, self.normalized, self._solved
             ), -1
         if self.mode == "dpw":
             if len(children) <= self.k * n_h**self.alpha:

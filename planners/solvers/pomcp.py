@@ -221,7 +221,7 @@ class POMCPPlanner:
         rollout = make_rollout(pomdp, cfg.rollout, self.actions, space, depth, gamma, rng, u)
         nodes = tree.actions
         select, backup, a_action = nodes.select, nodes.update, nodes.a_action
-        b_n, children, add_node = tree.visits, tree.children, tree.add_node
+        b_n, children, add_belief = tree.visits, tree.children, nodes.add_belief_node
         particles = tree.particles if cfg.reuse_tree else None
 
         def simulate(s: Any, h: int, d: int) -> float:
@@ -236,7 +236,8 @@ class POMCPPlanner:
                 if particles is not None and d == 0:
                     particles.setdefault(len(b_n) if h2 is None else h2, []).append(s2)
                 if h2 is None:
-                    children[key] = add_node()
+                    b_n.append(0)  # POMCPTree.add_node, inlined on this hot path
+                    children[key] = add_belief()
                     total = r + gamma * rollout(s2, d + 1)
                 else:
                     total = r + gamma * simulate(s2, h2, d + 1)
