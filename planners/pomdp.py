@@ -275,10 +275,6 @@ class GenerativePOMDP(ABC):
             [self.sample_initial_state(rng) for _ in range(n_particles)]
         )
 
-    def is_terminal(self, s: Any) -> bool:
-        """True when ``s`` is absorbing (the search stops there)."""
-        return False
-
     def plan_for(self, s: Any, rng: np.random.Generator) -> list[Hashable]:
         """An uncertainty-free plan from state ``s``: an open-loop action sequence that
         earns a high return if ``s`` were known to be the true state.
