@@ -1,8 +1,8 @@
 """Perception: RGB-D from the robot's head camera to part hypotheses for the belief.
 
 Imports numpy, torch, opencv and scipy only: it sees images, depth and camera poses,
-never MuJoCo, a planner or the rest of the stack (its errors are re-exported by
-:mod:`strug_manip.errors`).
+never MuJoCo, a planner or the rest of the stack (so its errors live in
+:mod:`perception.errors`).
 
 - :mod:`perception.inputs`: checking one view (shapes, dtypes, units, dropouts).
 - :mod:`perception.articulation_net`: the per-pixel network (classes, instance centre

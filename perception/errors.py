@@ -1,5 +1,5 @@
 """Perception's errors (``perception`` imports no other package of the stack, so its
-errors are defined here and re-exported with the rest in :mod:`strug_manip.errors`).
+errors are defined here, apart from the rest of the stack's :mod:`planners.errors`).
 
 Every message names the value and what was expected.
 """

@@ -1,52 +1,90 @@
 """Domain-agnostic online POMDP solvers (numpy only).
 
-Plan in any generative POMDP: implement :class:`planners.pomdp.GenerativePOMDP`
-(``step(s, a, rng)``, ``obs_loglik``, ``action_space``, ``sample_initial_state``),
-build a solver config (``POMCPOWConfig(sims=2000)``), then
-``config.planner(pomdp).act(belief, rng) -> (action, SearchInfo)``.
+Plan in any generative POMDP: subclass :class:`planners.pomdp.GenerativePOMDP` (five
+class attributes; ``step(s, a, rng)``, ``obs_loglik``, ``action_space``,
+``sample_initial_state``), build a solver config (``POMCPOWConfig(sims=2000)``), then
+either ``config.planner(pomdp).act(belief, rng) -> (action, SearchInfo)`` per decision
+or ``run_episode(pomdp, config, seed) -> EpisodeResult`` for a whole simulated
+episode. Every error raised on bad input is a :class:`PlannersError`.
 This package never imports mujoco, torch or ``strug_manip``.
 """
 
 from planners.belief import ParticleBelief, UpdateInfo, update_belief
+from planners.episode import (
+    DEFAULT_PARTICLES,
+    EpisodeResult,
+    StepRecord,
+    episode_generators,
+    run_episode,
+)
 from planners.errors import (
     BeliefError,
     ConfigError,
+    ModelError,
     ObservationError,
+    PlannersError,
     StrugError,
     UnknownNameError,
 )
-from planners.pomdp import ActionSchema, ActionSpace, GenerativePOMDP, HybridAction, Step
+from planners.pomdp import (
+    ActionSchema,
+    ActionSpace,
+    GenerativePOMDP,
+    HybridAction,
+    RolloutPolicy,
+    Step,
+    check_pomdp,
+)
 from planners.solvers import (
     SOLVER_SUMMARIES,
     SOLVERS,
+    ActiveLearningConfig,
+    BeliefTreeConfig,
+    EntropyConfig,
     POMCPConfig,
     POMCPOWConfig,
     RandomConfig,
     SearchInfo,
     SolverConfig,
+    STRUGConfig,
+    TreeSearchConfig,
     make_solver,
 )
 
 __all__ = [
+    "DEFAULT_PARTICLES",
     "SOLVERS",
     "SOLVER_SUMMARIES",
     "ActionSchema",
     "ActionSpace",
+    "ActiveLearningConfig",
     "BeliefError",
+    "BeliefTreeConfig",
     "ConfigError",
+    "EntropyConfig",
+    "EpisodeResult",
     "GenerativePOMDP",
     "HybridAction",
+    "ModelError",
     "ObservationError",
     "POMCPConfig",
     "POMCPOWConfig",
     "ParticleBelief",
+    "PlannersError",
     "RandomConfig",
+    "RolloutPolicy",
+    "STRUGConfig",
     "SearchInfo",
     "SolverConfig",
     "Step",
+    "StepRecord",
     "StrugError",
+    "TreeSearchConfig",
     "UnknownNameError",
     "UpdateInfo",
+    "check_pomdp",
+    "episode_generators",
     "make_solver",
+    "run_episode",
     "update_belief",
 ]

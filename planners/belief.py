@@ -32,11 +32,14 @@ from __future__ import annotations
 
 from collections.abc import Hashable, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from planners.errors import BeliefError, check_positive_float, check_positive_int
+
+if TYPE_CHECKING:
+    from planners.pomdp import GenerativePOMDP
 
 #: Origin index of a particle that has no initial ancestor (created by reinvigoration).
 NO_ORIGIN = -1
@@ -142,7 +145,7 @@ class UpdateInfo:
 
 
 def update_belief(
-    pomdp: Any,
+    pomdp: GenerativePOMDP,
     belief: ParticleBelief,
     a: Hashable,
     o: Any,
@@ -184,7 +187,7 @@ def update_belief(
 
 
 def _update_exact_match(
-    pomdp: Any,
+    pomdp: GenerativePOMDP,
     belief: ParticleBelief,
     a: Hashable,
     o: Any,
@@ -194,7 +197,8 @@ def _update_exact_match(
     min_match_fraction: float,
     resample_ess: float,
 ) -> tuple[ParticleBelief, UpdateInfo]:
-    step = pomdp.step
+    step, key_of = pomdp.step, pomdp.observation_key
+    key = key_of(o)
     # Pass 1: every particle once, in order, keeping its weight. An observation every
     # particle explains (Tiger's "nothing") then leaves the belief exactly as it was,
     # instead of adding multinomial resampling noise at every step.
@@ -206,7 +210,7 @@ def _update_exact_match(
         s_next, o_sim, _, _ = step(s, a, rng)
         proposed.append(s_next)
         proposed_origin.append(org)
-        if o_sim == o:
+        if key_of(o_sim) == key:
             kept.append(s_next)
             kept_w.append(w)
             kept_origin.append(org)
@@ -218,7 +222,7 @@ def _update_exact_match(
         for i in belief.sample_indices(rng, min(budget - draws, n)).tolist():
             s_next, o_sim, _, _ = step(belief.states[i], a, rng)
             draws += 1
-            if o_sim == o:
+            if key_of(o_sim) == key:
                 extra.append(s_next)
                 extra_origin.append(int(belief.origin[i]))
     matched = len(kept) + len(extra)
@@ -245,7 +249,7 @@ def _update_exact_match(
 
 
 def _update_likelihood(
-    pomdp: Any,
+    pomdp: GenerativePOMDP,
     belief: ParticleBelief,
     a: Hashable,
     o: Any,
@@ -263,7 +267,7 @@ def _update_likelihood(
 
 
 def _weighted(
-    pomdp: Any,
+    pomdp: GenerativePOMDP,
     states: list[Any],
     origin: np.ndarray,
     logw: np.ndarray,

@@ -14,15 +14,18 @@ broadly), and the best sequence (ended by a terminal step or by
 from __future__ import annotations
 
 from collections.abc import Hashable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from planners.errors import check_positive_int
 
+if TYPE_CHECKING:
+    from planners.pomdp import GenerativePOMDP
+
 
 def determinized_plan(
-    pomdp: Any,
+    pomdp: GenerativePOMDP,
     s: Any,
     rng: np.random.Generator,
     *,

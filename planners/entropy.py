@@ -1,10 +1,11 @@
 """Entropy of a weighted particle set (Entropy Regularized and Active Learning).
 
-Two estimators, picked by the domain's ``entropy_features(states)``:
+Two estimators, picked by the domain's ``discrete_states(states)``
+(:func:`state_entropy`):
 
-* **Discrete states** (``entropy_features`` returns None: ints, tuples of ints):
+* **Discrete states** (``discrete_states`` is True; by default ints, tuples of ints):
   the categorical entropy of the weight mass on each distinct state [nats].
-* **Continuous states** (it returns an ``(N, d)`` float array): the differential
+* **Continuous states** (``entropy_features`` gives an ``(N, d)`` float array): the differential
   entropy of a Gaussian with the particles' weighted mean and covariance,
   ``0.5 * log det(2 pi e Sigma)`` [nats], with ``MIN_VARIANCE`` added to the
   diagonal so that a collapsed cloud has a finite entropy. A Gaussian fit is the
@@ -16,9 +17,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from planners.pomdp import GenerativePOMDP
 
 #: Variance floor per dimension of the Gaussian estimate [state units^2].
 MIN_VARIANCE = 1e-4
@@ -48,3 +52,13 @@ def particle_entropy(
     cov = (d * w[:, None]).T @ d + MIN_VARIANCE * np.eye(x.shape[1])
     _, logdet = np.linalg.slogdet(2.0 * math.pi * math.e * cov)
     return 0.5 * float(logdet)
+
+
+def state_entropy(pomdp: GenerativePOMDP, states: Sequence[Any], weights: np.ndarray) -> float:
+    """Entropy [nats] of ``pomdp``'s particles ``states`` with ``weights`` (shape ``(N,)``):
+    categorical when ``pomdp.discrete_states(states)``, else the Gaussian estimate of
+    ``pomdp.entropy_features(states)``."""
+    states = list(states)
+    if pomdp.discrete_states(states):
+        return particle_entropy(states, weights, None)
+    return particle_entropy(states, weights, pomdp.entropy_features(states))

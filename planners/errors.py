@@ -1,22 +1,34 @@
-"""One exception hierarchy for the whole stack.
+"""The library's one exception hierarchy, re-exported by :mod:`planners`.
 
-Every error raised on bad input derives from :class:`StrugError`, so a caller can
-catch the family with one ``except`` and a user sees one sentence naming the bad value
-and what was expected, never a traceback from deep inside numpy.
+Every error the planners raise on bad input derives from :class:`PlannersError`, so a
+caller can catch the family with one ``except`` and a user sees one sentence naming
+the bad value and what was expected, never a traceback from deep inside numpy. The
+rest of the stack (the robot world, skills, the command line) raises these same
+classes; ``perception`` keeps its own (:mod:`perception.errors`) because it imports
+no other package of the stack.
 """
 
 from __future__ import annotations
 
 
-class StrugError(Exception):
-    """Base class of every error raised by strug-manip on bad input or impossible requests."""
+class PlannersError(Exception):
+    """Base class of every error raised on bad input or impossible requests."""
 
 
-class ConfigError(StrugError, ValueError):
+#: The name the ``strug`` command line catches: the same class as :class:`PlannersError`.
+StrugError = PlannersError
+
+
+class ConfigError(PlannersError, ValueError):
     """A hyper-parameter or option has an impossible value (negative count, NaN, ...)."""
 
 
-class UnknownNameError(StrugError, ValueError):
+class ModelError(PlannersError, ValueError):
+    """A domain (a :class:`planners.pomdp.GenerativePOMDP`) is incomplete or malformed:
+    a missing class attribute, an attribute of the wrong type, a bad action space."""
+
+
+class UnknownNameError(PlannersError, ValueError):
     """A name (domain, solver, config field) is not one of the valid choices."""
 
     def __init__(self, kind: str, name: object, choices: list[str] | tuple[str, ...]) -> None:
@@ -26,11 +38,11 @@ class UnknownNameError(StrugError, ValueError):
         super().__init__(f"unknown {kind} {name!r}; expected one of: {', '.join(self.choices)}")
 
 
-class BeliefError(StrugError, ValueError):
+class BeliefError(PlannersError, ValueError):
     """A belief cannot be formed or updated (all weights zero, NaN weights, empty set)."""
 
 
-class ObservationError(StrugError, ValueError):
+class ObservationError(PlannersError, ValueError):
     """An observation is malformed (NaN, wrong shape) for the domain it was given to."""
 
 

@@ -7,10 +7,22 @@ Nothing else about the transition needs a closed form.
 
 Actions are *hybrid*: the action space is a tuple of :class:`ActionSchema` (a
 controller kind, e.g. ``listen`` or ``move``), each with a box of continuous
-parameters (possibly none). A purely discrete domain has schemas of dimension 0 and
-its actions are the schema indices (plain ``int``); a hybrid domain uses
-:class:`HybridAction` ``(schema, params)``. Either way actions are hashable, which the
-search trees rely on to merge repeated samples.
+parameters (possibly none). A purely discrete domain (every schema of dimension 0) has
+the schema indices as actions (plain ``int``). A hybrid domain (some schema with
+parameters) uses :class:`HybridAction` ``(schema, params)`` for *every* action, a
+parameter-free schema's included (``HybridAction(1, ())``), so that domain code can
+always unpack ``schema, params = a``. An ``ActionSpace.make`` replaces both defaults.
+Either way actions are hashable, which the search trees rely on to merge repeated
+samples.
+
+A domain sets five class attributes (:data:`REQUIRED_ATTRIBUTES`; checked by
+:func:`check_pomdp`, which every planner constructor and
+:func:`planners.episode.run_episode` call) and implements four methods. Everything
+else has a default a domain may override: the optional capabilities ``plan_for`` (an
+uncertainty-free plan for one state), ``discrete_states`` (whether states are compared
+exactly), ``observation_key`` (the hashable key under which a search tree files an
+observation), ``rollout_policy``, ``reinvigorate`` and the array versions of ``step``
+and ``obs_loglik``.
 """
 
 from __future__ import annotations
@@ -23,7 +35,7 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
-from planners.errors import ConfigError, ObservationError
+from planners.errors import ConfigError, ModelError, ObservationError
 
 if TYPE_CHECKING:
     from planners.belief import ParticleBelief
@@ -83,8 +95,10 @@ class ActionSpace:
         discretized: a finite action set for solvers that need one (POMCP). For a
             purely discrete space it is every action; for a continuous one it is the
             domain's documented discretisation (e.g. 8 unit moves + stop).
-        make: builds an action from ``(schema index, params tuple)``; defaults to the
-            schema index for parameter-free schemas and :class:`HybridAction` otherwise.
+        make: builds an action from ``(schema index, params tuple)``. Default: the
+            schema index (``int``) when *every* schema is parameter-free (a discrete
+            space), else :class:`HybridAction` for every schema, a parameter-free one
+            included (``HybridAction(i, ())``).
         describe: formats an action for people.
     """
 
@@ -180,25 +194,42 @@ class RolloutPolicy(ABC):
         return memory
 
 
+#: The class attributes every domain sets, with what each must be.
+REQUIRED_ATTRIBUTES: dict[str, str] = {
+    "name": "a non-empty str naming the domain",
+    "discount": "the discount factor gamma, a number in (0, 1]",
+    "max_steps": "the episode length limit, an int >= 1",
+    "max_abs_reward": "the largest reward magnitude, a finite number > 0",
+    "discrete_observations": "a bool: True when observations are finitely many and "
+    "compared by their observation_key, False when they are weighted with obs_loglik",
+}
+
+
 class GenerativePOMDP(ABC):
     """Base class of the domains: the protocol solvers use, plus sensible defaults.
 
-    Subclasses set the class attributes and implement the abstract methods.
+    Subclasses set the five class attributes (no defaults: a missing one is a
+    :class:`planners.errors.ModelError` naming it, see :func:`check_pomdp`) and
+    implement the four abstract methods. The other methods are optional capabilities,
+    each with one default.
 
     Attributes:
         name: canonical domain name (``tiger``, ``lightdark1d``, ...).
         discount: the discount factor gamma in (0, 1].
         max_steps: the episode length limit used by the runner.
-        max_abs_reward: the largest reward magnitude; the default UCB constant ``c``.
+        max_abs_reward: the largest reward magnitude; the default UCB constant ``c``
+            and TRU's reward scale.
         discrete_observations: True when observations are finitely many and compared
-            with ``==``; False when they are real vectors weighted with ``obs_loglik``.
+            exactly (by :meth:`observation_key`): the belief update keeps the particles
+            whose simulated observation matches, and the belief tree merges repeats.
+            False when they are real values or vectors weighted with ``obs_loglik``.
     """
 
-    name: str = "pomdp"
-    discount: float = 0.95
-    max_steps: int = 10
-    max_abs_reward: float = 10.0
-    discrete_observations: bool = True
+    name: str
+    discount: float
+    max_steps: int
+    max_abs_reward: float
+    discrete_observations: bool
 
     @abstractmethod
     def sample_initial_state(self, rng: np.random.Generator) -> Any:
@@ -244,9 +275,53 @@ class GenerativePOMDP(ABC):
             [self.sample_initial_state(rng) for _ in range(n_particles)]
         )
 
-    def is_terminal(self, s: Any) -> bool:
-        """True when ``s`` is absorbing (the search stops there)."""
-        return False
+    def plan_for(self, s: Any, rng: np.random.Generator) -> list[Hashable]:
+        """An uncertainty-free plan from state ``s``: an open-loop action sequence that
+        earns a high return if ``s`` were known to be the true state.
+
+        STRUG uses it twice: for the compatibility matrix behind TRU
+        (:func:`planners.tru.compatibility_matrix`) and for the ``"plan"`` rollouts of
+        the belief-tree solvers. The default, :func:`planners.determinized.determinized_plan`,
+        is a beam search over the discretised actions on a determinised model: it needs
+        nothing from the domain but costs ``8 * len(discretized) * max_steps`` simulated
+        sequences per call. A domain that knows its optimal plan should say so here:
+        with the default STRUG's rollouts fall back to random ones (``rollout="auto"``),
+        and only the M plans of the matrix pay for the search.
+        """
+        from planners.determinized import determinized_plan
+
+        return determinized_plan(self, s, rng)
+
+    def discrete_states(self, states: list[Any]) -> bool:
+        """True when ``states`` (a non-empty list) are finitely many and compared with
+        ``==``: their entropy is categorical, the root particles of the belief-tree
+        solvers are importance-corrected per distinct state, and Active Learning's most
+        likely state is the mode. Default: ints and tuples of ints are discrete.
+        """
+        first = states[0]
+        return isinstance(first, int | np.integer) or (
+            isinstance(first, tuple) and all(isinstance(x, int | np.integer) for x in first)
+        )
+
+    def observation_key(self, o: Any) -> Hashable:
+        """The hashable key of observation ``o``: two observations are the same exactly
+        when their keys are equal.
+
+        The search trees file observation children under it (POMCP's observation bins,
+        POMCPOW's and the belief tree's children) and the exact-match belief update
+        compares with it, so observations may be unhashable values such as numpy
+        arrays. Default: a numpy array of at most one dimension becomes the tuple of its
+        values, a higher-dimensional one ``(shape, values)``, a list a tuple, and
+        anything else is its own key. (POMCP bins the key on continuous-observation
+        domains, so there it must be a number or a flat tuple of numbers.)
+        """
+        cls = o.__class__
+        if cls is np.ndarray:
+            values = tuple(o.ravel().tolist())
+            return values if o.ndim <= 1 else (o.shape, values)
+        if cls is list:
+            return tuple(o)
+        return o
 
     def check_observation(self, o: Any) -> None:
         """Raise :class:`ObservationError` when ``o`` is malformed (NaN, not finite)."""
@@ -278,13 +353,11 @@ class GenerativePOMDP(ABC):
     def entropy_features(self, states: list[Any]) -> np.ndarray | None:
         """Continuous features of ``states`` for entropy estimates, shape ``(N, d)``.
 
-        None (the default for ints and tuples of ints) means the states are discrete and
-        their entropy is categorical; see :mod:`planners.entropy`.
+        None when :meth:`discrete_states` says the states are discrete (their entropy
+        is then categorical; see :mod:`planners.entropy`); by default the states as a
+        float array.
         """
-        first = states[0]
-        if isinstance(first, int | np.integer) or (
-            isinstance(first, tuple) and all(isinstance(x, int | np.integer) for x in first)
-        ):
+        if self.discrete_states(states):
             return None
         return np.asarray(states, dtype=float).reshape(len(states), -1)
 
@@ -299,3 +372,45 @@ class GenerativePOMDP(ABC):
     def summarize_belief(self, belief: ParticleBelief) -> str:
         """A one-line summary of a belief (domains override with something meaningful)."""
         return f"{len(belief)} particles, ESS {belief.ess():.0f}"
+
+
+def provides_plan(pomdp: GenerativePOMDP) -> bool:
+    """True when ``pomdp``'s class defines its own :meth:`GenerativePOMDP.plan_for`."""
+    return type(pomdp).plan_for is not GenerativePOMDP.plan_for
+
+
+def check_pomdp(pomdp: Any) -> None:
+    """Raise :class:`ModelError` unless ``pomdp`` is a complete :class:`GenerativePOMDP`.
+
+    Checks the class attributes of :data:`REQUIRED_ATTRIBUTES` (present, of the right
+    type and range) and that ``action_space()`` returns an :class:`ActionSpace`. The
+    message names the domain class and the attribute.
+    """
+    if not isinstance(pomdp, GenerativePOMDP):
+        raise ModelError(
+            f"expected a planners.GenerativePOMDP instance, got {type(pomdp).__name__}"
+        )
+    cls = type(pomdp).__name__
+    for attr, expected in REQUIRED_ATTRIBUTES.items():
+        if not hasattr(pomdp, attr):
+            raise ModelError(f"{cls} must set the class attribute {attr}: {expected}")
+        if not _attribute_ok(attr, getattr(pomdp, attr)):
+            raise ModelError(f"{cls}.{attr} must be {expected}, got {getattr(pomdp, attr)!r}")
+    space = pomdp.action_space()
+    if not isinstance(space, ActionSpace):
+        raise ModelError(
+            f"{cls}.action_space() must return a planners.ActionSpace, got {type(space).__name__}"
+        )
+
+
+def _attribute_ok(attr: str, v: Any) -> bool:
+    number = isinstance(v, int | float | np.integer | np.floating) and not isinstance(v, bool)
+    if attr == "name":
+        return isinstance(v, str) and bool(v)
+    if attr == "discount":
+        return number and 0.0 < v <= 1.0
+    if attr == "max_steps":
+        return isinstance(v, int | np.integer) and not isinstance(v, bool) and v >= 1
+    if attr == "max_abs_reward":
+        return number and math.isfinite(v) and v > 0.0
+    return isinstance(v, bool | np.bool_)

@@ -2,7 +2,8 @@
 
 STRUG paper, Section IV and Algorithm 1. For M particles ``x_0 .. x_{M-1}`` drawn
 from the belief, each particle gets an uncertainty-free plan (an open-loop action
-sequence: the domain's ``plan_for``, else :func:`planners.determinized.determinized_plan`).
+sequence: the domain's ``plan_for``, whose default is
+:func:`planners.determinized.determinized_plan`).
 Executing plan i K times from particle j gives the compatibility matrix
 
     S[i, j] = 1/K sum_k sum_t gamma^t r_t        (discounted return of plan i on particle j)
@@ -34,11 +35,14 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Hashable, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from planners.errors import BeliefError, ConfigError, check_positive_int
+
+if TYPE_CHECKING:
+    from planners.pomdp import GenerativePOMDP
 
 Plan = Sequence[Hashable]
 
@@ -90,7 +94,7 @@ class CompatibilityMatrix:
 
 
 def execute_plan(
-    pomdp: Any, s: Any, plan: Plan, rng: np.random.Generator, discount: float
+    pomdp: GenerativePOMDP, s: Any, plan: Plan, rng: np.random.Generator, discount: float
 ) -> tuple[float, int]:
     """Discounted return of the open-loop ``plan`` from ``s``, and the steps it took."""
     total, disc, steps = 0.0, 1.0, 0
@@ -106,7 +110,7 @@ def execute_plan(
 
 
 def compatibility_matrix(
-    pomdp: Any,
+    pomdp: GenerativePOMDP,
     states: Sequence[Any],
     repeats: int,
     rng: np.random.Generator,
@@ -123,8 +127,8 @@ def compatibility_matrix(
             domain's transitions and rewards are deterministic given the actions).
         rng: randomness for planning and execution.
         discount: return discount (default: the domain's).
-        plan_fn: ``plan(s, rng) -> actions``; default ``pomdp.plan_for`` when the domain
-            has it, else the determinised forward search.
+        plan_fn: ``plan(s, rng) -> actions``; default ``pomdp.plan_for`` (whose own
+            default is the determinised forward search).
     """
     check_positive_int("repeats (K)", repeats)
     if len(states) == 0:
@@ -132,13 +136,7 @@ def compatibility_matrix(
     t0 = time.perf_counter()
     gamma = pomdp.discount if discount is None else discount
     if plan_fn is None:
-        plan_fn = getattr(pomdp, "plan_for", None)
-        if plan_fn is None:
-            from planners.determinized import determinized_plan
-
-            def plan_fn(s: Any, g: np.random.Generator) -> Plan:
-                return determinized_plan(pomdp, s, g)
-
+        plan_fn = pomdp.plan_for
     plans = [list(plan_fn(s, rng)) for s in states]
     m = len(states)
     values = np.zeros((m, m))

@@ -11,7 +11,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from planners.errors import ConfigError, StrugError, UnknownNameError
+from planners.errors import ConfigError, PlannersError, UnknownNameError
 from strug_manip.objects import generator as gen
 from strug_manip.objects.generator import PartSpec, generate_cabinet
 from strug_manip.objects.partnet import (
@@ -521,7 +521,7 @@ def test_malformed_urdf_gives_one_clear_config_error(
         (tmp_path / "mobility.urdf").write_text(text)
     with pytest.raises(ConfigError, match=message) as info:
         load_articulated_object(tmp_path)
-    assert isinstance(info.value, StrugError)
+    assert isinstance(info.value, PlannersError)
     assert str(tmp_path) in str(info.value)
 
 

@@ -1,4 +1,4 @@
-"""Bad input gets one clear StrugError-family message naming the value."""
+"""Bad input gets one clear PlannersError-family message naming the value."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import sys
 
 import pytest
 
-from planners.errors import ConfigError, StrugError, UnknownNameError
+from planners.errors import ConfigError, PlannersError, UnknownNameError
 from planners.solvers import POMCPConfig, POMCPOWConfig, RandomConfig, make_solver
 from strug_manip.domains import make_domain
 from strug_manip.domains.tiger import ExtendedTiger
@@ -59,7 +59,7 @@ def test_negative_seed_and_particles() -> None:
 
 def test_errors_share_one_family() -> None:
     for exc in (ConfigError, UnknownNameError):
-        assert issubclass(exc, StrugError)
+        assert issubclass(exc, PlannersError)
 
 
 @pytest.mark.parametrize(

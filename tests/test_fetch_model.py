@@ -13,7 +13,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from planners.errors import ConfigError, StrugError
+from planners.errors import ConfigError, PlannersError
 from strug_manip.robot import (
     ACTUATORS,
     ALL_JOINTS,
@@ -200,11 +200,11 @@ def test_jacobian_columns_follow_the_requested_names(kin: FetchKinematics) -> No
 
 
 def test_unknown_joint_name_lists_the_valid_ones(kin: FetchKinematics) -> None:
-    with pytest.raises(StrugError, match="elbow_flex_joint"):
+    with pytest.raises(PlannersError, match="elbow_flex_joint"):
         kin.forward({"elbow": 1.0})
-    with pytest.raises(StrugError, match="shoulder_pan_joint"):
+    with pytest.raises(PlannersError, match="shoulder_pan_joint"):
         kin.jacobian({}, ["nope"])
-    with pytest.raises(StrugError, match="gripper"):
+    with pytest.raises(PlannersError, match="gripper"):
         kin.frame_pose("tcp", {})
 
 

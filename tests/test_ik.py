@@ -8,7 +8,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from planners.errors import ConfigError, StrugError, UnknownNameError
+from planners.errors import ConfigError, PlannersError, UnknownNameError
 from strug_manip.control.ik import FetchIK, IKResult, body_geoms
 from strug_manip.robot.fetch import ARM_TORSO_JOINTS as IK_JOINTS
 from strug_manip.robot.fetch import BASE_JOINTS, FETCH_XML, FetchKinematics
@@ -143,7 +143,7 @@ def test_bad_options_raise(ik, kin):
         ik.solve(T, pos_tol=-1.0)
     with pytest.raises(ConfigError, match="max_iters"):
         ik.solve(T, max_iters=0)
-    with pytest.raises(StrugError, match="restarts"):
+    with pytest.raises(PlannersError, match="restarts"):
         FetchIK(restarts=-1)
     with pytest.raises(UnknownNameError, match="nose"):
         FetchIK(posture={"nose": 1.0})

@@ -9,10 +9,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from perception.errors import BadInputError, NoCabinetError
+from perception.errors import BadInputError, NoCabinetError, PerceptionError
 from perception.fusion import fuse
 from perception.inputs import MAX_DROPOUT, check_view
-from strug_manip.errors import PerceptionError, StrugError  # noqa: F401  (re-exported)
 from strug_manip.world.perception_data import ViewRanges, render_cabinet, render_episode
 
 WEIGHTS = Path(__file__).resolve().parents[1] / "models" / "perception" / "articulation_net.pt"

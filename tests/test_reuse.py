@@ -34,6 +34,7 @@ class RevealTiger(GenerativePOMDP):
     discount = 0.95
     max_steps = 10
     max_abs_reward = 10.0
+    discrete_observations = True
 
     def action_space(self) -> ActionSpace:
         return make_domain("tiger").action_space()
@@ -72,19 +73,19 @@ def test_reused_tree_gives_the_fresh_trees_decision() -> None:
     assert info1.visits.sum() == info1.extra["reused_visits"] + 300 > fresh.visits.sum()
 
 
-def _same_subtree(old: POMCPTree, h: int, new: POMCPTree, g: int, n_actions: int) -> int:
+def _same_subtree(old: POMCPTree, h: int, new: POMCPTree, g: int) -> int:
     """Walk both trees in step; return the number of belief nodes compared."""
-    assert old.b_n[h] == new.b_n[g]
-    fo, fn = old.b_first[h], new.b_first[g]
-    assert (fo < 0) == (fn < 0)
-    if fo < 0:
-        return 1
-    assert old.a_n[fo : fo + n_actions] == new.a_n[fn : fn + n_actions]
-    assert old.a_q[fo : fo + n_actions] == new.a_q[fn : fn + n_actions]
+    assert old.visits[h] == new.visits[g]
+    ko, kn = old.actions.b_children[h], new.actions.b_children[g]
+    assert len(ko) == len(kn)
+    assert [old.actions.a_action[j] for j in ko] == [new.actions.a_action[j] for j in kn]
+    assert [old.actions.a_n[j] for j in ko] == [new.actions.a_n[j] for j in kn]
+    assert [old.actions.a_q[j] for j in ko] == [new.actions.a_q[j] for j in kn]
     count = 1
-    for (ai, key), child in old.children.items():
-        if fo <= ai < fo + n_actions:
-            count += _same_subtree(old, child, new, new.children[(fn + ai - fo, key)], n_actions)
+    for (anode, key), child in old.children.items():
+        if anode in ko:
+            twin = new.children[(kn[ko.index(anode)], key)]
+            count += _same_subtree(old, child, new, twin)
     return count
 
 
@@ -95,10 +96,11 @@ def test_subtree_copies_exactly_the_nodes_below_the_child() -> None:
     old = planner._tree
     assert old is not None
     h = old.child(LISTEN, 0)  # (listen, hear-left)
-    sub = old.subtree(h, 3)
-    compared = _same_subtree(old, h, sub, 0, 3)
-    assert compared == len(sub.b_n) > 10  # every copied node is reachable, none is missing
-    assert len(sub.b_n) < len(old.b_n)
+    sub = old.subtree(h)
+    compared = _same_subtree(old, h, sub, 0)
+    assert compared == len(sub.visits) > 10  # every copied node is reachable, none is missing
+    assert len(sub.visits) < len(old.visits)
+    assert sub.actions.size() == 3 * sum(1 for k in sub.actions.b_children if k)
 
 
 def test_disagreeing_particles_drop_the_subtree() -> None:

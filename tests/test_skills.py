@@ -36,7 +36,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from planners.errors import ConfigError, StrugError, UnknownNameError
+from planners.errors import ConfigError, PlannersError, UnknownNameError
 from strug_manip.control import (
     STATUSES,
     ControlContext,
@@ -719,7 +719,7 @@ def test_bad_parameters_raise_one_clear_error_before_anything_moves(worlds) -> N
         SkillParams(line_step=0.0)
     with pytest.raises(ConfigError, match=r"time_budget.*nan"):
         SkillParams(time_budget=math.nan)
-    assert issubclass(ConfigError, StrugError) and issubclass(UnknownNameError, StrugError)
+    assert issubclass(ConfigError, PlannersError) and issubclass(UnknownNameError, PlannersError)
 
 
 def test_an_unreachable_grasp_is_ik_infeasible_and_nothing_moves(worlds, ctx) -> None:

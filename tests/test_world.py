@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from planners.errors import StrugError
+from planners.errors import PlannersError
 from strug_manip.world import ManipulationWorld, SceneConfig, depth_to_points
 from strug_manip.world.scene import look_at_xyaxes
 
@@ -44,7 +44,7 @@ def test_reset_sets_part_positions_by_name(world) -> None:
     assert world.part_positions()[joint] == pytest.approx(0.05)
     world.reset()
     assert world.part_positions()[joint] == 0.0
-    with pytest.raises(StrugError, match="unknown cabinet joint 'nope'"):
+    with pytest.raises(PlannersError, match="unknown cabinet joint 'nope'"):
         world.reset({"nope": 0.1})
 
 
@@ -122,14 +122,14 @@ def test_snapshot_restore_returns_to_the_same_physics(world) -> None:
     assert world.snapshot() == state and hash(world.snapshot()) == hash(state)
     world.step(0.3)
     assert np.array_equal(world.data.qpos, after)  # bit for bit: physics is deterministic
-    with pytest.raises(StrugError, match="state must be a WorldState"):
+    with pytest.raises(PlannersError, match="state must be a WorldState"):
         world.restore("not a state")  # type: ignore[arg-type]
 
 
 def test_body_pose_by_name(world) -> None:
     world.reset()
     assert world.body_pose("object")[:3, 3] == pytest.approx(world.object_pose()[:3, 3])
-    with pytest.raises(StrugError, match="unknown body 'nope'"):
+    with pytest.raises(PlannersError, match="unknown body 'nope'"):
         world.body_pose("nope")
 
 

@@ -18,7 +18,7 @@ import argparse
 import time
 from pathlib import Path
 
-from planners.errors import StrugError
+from planners.errors import PlannersError
 from strug_manip.objects.generator import PART_KINDS, generate_cabinet
 from strug_manip.objects.partnet import load_articulated_object, write_partnet
 
@@ -52,7 +52,7 @@ def main(argv: list[str] | None = None) -> int:
         t0 = time.perf_counter()
         try:
             spec = generate_cabinet(seed, kinds=kinds)
-        except StrugError as e:
+        except PlannersError as e:
             ap.error(str(e))
         folder = write_partnet(spec, args.out / f"{name}_{seed}")
         line = (

@@ -22,7 +22,9 @@ normalised over the node's visited children; unvisited children are tried first,
 order. A child marked *solved* (:meth:`ActionTree.mark_solved`) competes with its value
 alone, without the exploration term: its value is known exactly, so visiting it again
 cannot teach anything (MCTS-Solver, Winands, Bjornsson & Saito 2008). Storage is flat
-lists indexed by node id.
+lists indexed by node id; every action node also holds the list of observation
+children (belief-node ids, with repeats) its solver generated under it, so a search
+keeps no per-node list of its own parallel to the tree's.
 """
 
 from __future__ import annotations
@@ -33,7 +35,7 @@ import numpy as np
 
 from planners.errors import ConfigError, check_positive_float
 from planners.pomdp import ActionSpace
-from planners.solvers.exploration import ucb_select
+from planners.solvers.exploration import best_index, ucb_select
 
 WIDENING_MODES = ("auto", "all", "dpw", "hpw")
 
@@ -61,7 +63,12 @@ class ActionTree:
         a_q: value estimate per action node.
         a_action: the action of each action node.
         a_solved: per action node, True once its value is known exactly.
+        a_children: per action node, the belief-node ids of the observation children
+            generated under it, in order and with repeats (filled by the solver: a
+            uniform pick from it is a pick in proportion to how often each came up).
         b_children: action-node ids per belief node (all schemas).
+        b_schema_first: HPW only: the first schema node of each belief node (-1 until
+            its first selection).
     """
 
     def __init__(
@@ -86,7 +93,10 @@ class ActionTree:
         self.a_q: list[float] = []
         self.a_action: list[Hashable] = []
         self.a_solved: list[bool] = []
+        self.a_children: list[list[int]] = []
         self.b_children: list[list[int]] = []
+        # What UCB reads as "solved": None until a node is solved (no per-child test).
+        self._solved: list[bool] | None = None
         self._lookup: dict[tuple[int, Hashable], int] = {}
         # HPW: schema nodes (one per belief node and schema), contiguous per belief node.
         self.s_n: list[int] = []
@@ -96,10 +106,30 @@ class ActionTree:
         self.s_owner: list[int] = []
         self.b_schema_first: list[int] = []
 
-    def add_belief_node(self) -> None:
-        """Register the next belief node id (call once per belief node, in id order)."""
+    def empty_like(self) -> ActionTree:
+        """A tree without nodes and with this one's settings (a kept subtree's new home)."""
+        return ActionTree(
+            self.space, self.mode, self.k, self.alpha, self.c, self.rng, self.u, self.normalized
+        )
+
+    def expand_all(self, h: int) -> list[int]:
+        """Make every action of the finite action set a child of ``h`` (which has none
+        yet); returns its children. The actions are distinct, so no lookup is needed."""
+        n, k = len(self.a_n), len(self.actions)
+        self.b_children[h].extend(range(n, n + k))
+        self.a_n.extend([0] * k)
+        self.a_q.extend([0.0] * k)
+        self.a_action.extend(self.actions)
+        self.a_solved.extend([False] * k)
+        self.a_children.extend([[] for _ in range(k)])
+        return self.b_children[h]
+
+    def add_belief_node(self) -> int:
+        """Register the next belief node (call once per belief node); returns its id."""
         self.b_children.append([])
-        self.b_schema_first.append(-1)
+        if self.mode == "hpw":
+            self.b_schema_first.append(-1)
+        return len(self.b_children) - 1
 
     def _add_action(self, h: int, a: Hashable) -> int:
         key = (h, a)
@@ -111,6 +141,7 @@ class ActionTree:
             self.a_q.append(0.0)
             self.a_action.append(a)
             self.a_solved.append(False)
+            self.a_children.append([])
         return node
 
     def mark_solved(self, anode: int, snode: int = -1) -> None:
@@ -120,6 +151,7 @@ class ActionTree:
         that action node is then the schema's only child.
         """
         self.a_solved[anode] = True
+        self._solved = self.a_solved
         if snode >= 0:
             first = self.b_schema_first[self.s_owner[snode]]
             if self.space.schemas[snode - first].dim == 0:
@@ -127,7 +159,7 @@ class ActionTree:
 
     def _ucb(self, children: list[int], n_parent: int) -> int:
         return ucb_select(
-            children, self.a_q, self.a_n, n_parent, self.c, self.normalized, self.a_solved
+            children, self.a_q, self.a_n, n_parent, self.c, self.normalized, self._solved
         )
 
     def select(self, h: int, n_h: int) -> tuple[int, int]:
@@ -138,11 +170,12 @@ class ActionTree:
             n_h: its visit count N(h) before this simulation.
         """
         children = self.b_children[h]
-        if self.mode == "all":
+        if self.mode == "all":  # the hot path of POMCP: one call, no detour
             if not children:
-                for a in self.actions:
-                    self._add_action(h, a)
-            return self._ucb(children, n_h), -1
+                self.expand_all(h)
+            return ucb_select(
+                children, self.a_q, self.a_n, n_h, self.c, self.normalized, self._solved
+            ), -1
         if self.mode == "dpw":
             if len(children) <= self.k * n_h**self.alpha:
                 self._add_action(h, self.space.sample(self.rng))
@@ -203,9 +236,8 @@ class ActionTree:
     def best_root_action(self) -> Hashable | None:
         """The visited root action with the highest value (None if nothing was visited)."""
         actions, q, visits = self.root_stats()
-        if not actions or not np.any(visits > 0):
-            return None
-        return actions[int(np.argmax(np.where(visits > 0, q, -np.inf)))]
+        i = best_index(q, visits)
+        return None if i is None else actions[i]
 
     def size(self) -> int:
         """Number of action nodes."""

@@ -26,8 +26,9 @@ from typing import Any, ClassVar
 import numpy as np
 
 from planners.belief import ParticleBelief
-from planners.entropy import particle_entropy
+from planners.entropy import state_entropy
 from planners.errors import check_positive_float
+from planners.pomdp import GenerativePOMDP, check_pomdp
 from planners.solvers.base import SearchInfo
 from planners.solvers.belief_tree import (
     BeliefTreeConfig,
@@ -56,18 +57,18 @@ class ActiveLearningConfig(BeliefTreeConfig):
         if not np.isfinite(self.entropy_threshold):
             check_positive_float("entropy_threshold", self.entropy_threshold)
 
-    def planner(self, pomdp: Any) -> ActiveLearningPlanner:
+    def planner(self, pomdp: GenerativePOMDP) -> ActiveLearningPlanner:
         return ActiveLearningPlanner(self, pomdp)
 
 
-def most_likely_state(pomdp: Any, belief: ParticleBelief) -> Any:
+def most_likely_state(pomdp: GenerativePOMDP, belief: ParticleBelief) -> Any:
     """The mode (discrete states) or the particle nearest the weighted mean (continuous)."""
-    features = pomdp.entropy_features(belief.states)
-    if features is None:
+    if pomdp.discrete_states(belief.states):
         mass: dict[Any, float] = {}
         for s, w in zip(belief.states, belief.weights.tolist(), strict=True):
             mass[s] = mass.get(s, 0.0) + w
         return max(mass, key=mass.__getitem__)
+    features = pomdp.entropy_features(belief.states)
     mean = belief.weights @ features
     return belief.states[int(np.argmin(((features - mean) ** 2).sum(axis=1)))]
 
@@ -75,7 +76,8 @@ def most_likely_state(pomdp: Any, belief: ParticleBelief) -> Any:
 class ActiveLearningPlanner(EpisodeSteps):
     """Learn (entropy reduction only) until confident, then exploit the MAP model."""
 
-    def __init__(self, config: ActiveLearningConfig, pomdp: Any) -> None:
+    def __init__(self, config: ActiveLearningConfig, pomdp: GenerativePOMDP) -> None:
+        check_pomdp(pomdp)
         self.config = config
         self.pomdp = pomdp
         self.value = entropy_value(pomdp)
@@ -83,7 +85,7 @@ class ActiveLearningPlanner(EpisodeSteps):
     def act(self, belief: ParticleBelief, rng: np.random.Generator) -> tuple[Hashable, SearchInfo]:
         cfg = self.config
         pomdp = self.pomdp
-        h = particle_entropy(belief.states, belief.weights, pomdp.entropy_features(belief.states))
+        h = state_entropy(pomdp, belief.states, belief.weights)
         threshold = cfg.entropy_threshold
         if h > threshold:
             states, weights = root_particles(pomdp, belief, cfg.particles, rng)

@@ -18,13 +18,16 @@ import math
 import time
 from collections.abc import Hashable
 from dataclasses import dataclass, field
-from typing import Any, ClassVar, Protocol
+from typing import TYPE_CHECKING, Any, ClassVar, Protocol
 
 import numpy as np
 
 from planners.belief import ParticleBelief
 from planners.errors import ConfigError, UnknownNameError, check_positive_float, check_positive_int
 from planners.solvers.exploration import check_exploration
+
+if TYPE_CHECKING:
+    from planners.pomdp import GenerativePOMDP
 
 
 @dataclass
@@ -39,6 +42,11 @@ class SearchInfo:
         q: value estimate per root action, shape ``(len(actions),)``.
         visits: visit count per root action, shape ``(len(actions),)``.
         extra: solver-specific figures (e.g. TRU at the root, ΔTRU per action).
+        tree: the whole search tree, only when the config asked for it
+            (``keep_tree=True``; None otherwise): a
+            :class:`planners.solvers.belief_tree.BeliefTreeSearch` (STRUG, Entropy,
+            Active Learning), a :class:`planners.solvers.pomcpow.POMCPOWTree` or a
+            :class:`planners.solvers.pomcp.POMCPTree`.
     """
 
     sims: int = 0
@@ -48,6 +56,7 @@ class SearchInfo:
     q: np.ndarray = field(default_factory=lambda: np.zeros(0))
     visits: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     extra: dict[str, Any] = field(default_factory=dict)
+    tree: Any = field(default=None, repr=False)
 
     @property
     def sims_per_second(self) -> float:
@@ -92,7 +101,7 @@ class SolverConfig:
         if self.time_limit is not None:
             check_positive_float("time_limit", self.time_limit)
 
-    def planner(self, pomdp: Any) -> Planner:
+    def planner(self, pomdp: GenerativePOMDP) -> Planner:
         """Build the planner for ``pomdp``."""
         raise NotImplementedError
 
@@ -138,6 +147,8 @@ class TreeSearchConfig(SolverConfig):
             planner then serves one episode). On the classic Tiger the best
             receding-horizon policy is worth 6.11, the finite-horizon optimum 6.69: near
             the end, listening before a door stops paying.
+        keep_tree: return the search tree in ``SearchInfo.tree`` (default False: it is
+            dropped after the decision, so long episodes do not hold every tree).
     """
 
     depth: int | None = None
@@ -146,9 +157,12 @@ class TreeSearchConfig(SolverConfig):
     exploration: str = "fixed"
     c_normalized: float = 1.0
     horizon: str = "receding"
+    keep_tree: bool = False
 
     def __post_init__(self) -> None:
         super().__post_init__()
+        if not isinstance(self.keep_tree, bool):
+            raise ConfigError(f"keep_tree must be true or false, got {self.keep_tree!r}")
         if self.depth is not None:
             check_positive_int("depth", self.depth)
         if self.c is not None:
@@ -164,7 +178,7 @@ class TreeSearchConfig(SolverConfig):
         """True when the UCB value term is normalised (``exploration="normalized"``)."""
         return self.exploration == "normalized"
 
-    def resolved(self, pomdp: Any) -> tuple[int, float, float]:
+    def resolved(self, pomdp: GenerativePOMDP) -> tuple[int, float, float]:
         """``(depth, c, discount)`` with the domain's defaults filled in.
 
         ``c`` is the constant of the chosen ``exploration``: ``c`` (reward units) when
@@ -178,7 +192,7 @@ class TreeSearchConfig(SolverConfig):
         gamma = self.discount if self.discount is not None else float(pomdp.discount)
         return depth, c, gamma
 
-    def search_depth(self, pomdp: Any, steps_taken: int) -> int:
+    def search_depth(self, pomdp: GenerativePOMDP, steps_taken: int) -> int:
         """The depth of the decision after ``steps_taken`` real steps (see ``horizon``)."""
         depth = self.depth if self.depth is not None else int(pomdp.max_steps)
         if self.horizon == "episode":

@@ -37,12 +37,13 @@ from typing import Any
 import numpy as np
 
 from planners.errors import ConfigError, check_positive_float, check_positive_int
+from planners.pomdp import GenerativePOMDP
 from planners.solvers.action_tree import ActionTree, check_widening, resolve_widening
 from planners.solvers.base import Budget, SearchInfo, TreeSearchConfig, UniformStream
-from planners.solvers.rollout import check_rollout, make_rollout
+from planners.solvers.rollout import check_rollout, make_rollout, plan_return, resolve_rollout
 
 #: Leaf estimators of a new belief node.
-ROLLOUTS = ("random", "plan", "heuristic")
+ROLLOUTS = ("random", "plan", "heuristic", "auto")
 
 #: Where terminal actions are solved (see ``BeliefTreeConfig.solve_terminal``).
 SOLVE_TERMINAL = ("auto", "always", "never")
@@ -88,9 +89,11 @@ class BeliefTreeConfig(TreeSearchConfig):
             weight and execute i's uncertainty-free plan, ``pomdp.plan_for``, from j:
             its expectation is the value of committing to a plan under the node's
             belief, high where the belief is concentrated), or ``"heuristic"`` (the
-            domain's :meth:`rollout_policy` from one particle drawn by weight). Default
-            ``"random"``; STRUG, which owns the uncertainty-free planner, defaults to
-            ``"plan"``.
+            domain's :meth:`rollout_policy` from one particle drawn by weight), or
+            ``"auto"`` (``"plan"`` when the domain defines its own ``plan_for``, else
+            ``"random"``: the default ``plan_for`` is a beam search, too slow to run
+            once per rollout). Default ``"random"``; STRUG, which owns the
+            uncertainty-free planner, defaults to ``"auto"``.
         exploration: ``"fixed"`` (default) or ``"normalized"`` UCB (see
             :class:`TreeSearchConfig`); ``c_normalized`` its constant (default 1.0).
         horizon: ``"receding"`` (default) or ``"episode"`` (see :class:`TreeSearchConfig`).
@@ -132,11 +135,11 @@ class EpisodeSteps:
 
 
 def root_particles(
-    pomdp: Any, belief: Any, m: int, rng: np.random.Generator
+    pomdp: GenerativePOMDP, belief: Any, m: int, rng: np.random.Generator
 ) -> tuple[list[Any], np.ndarray]:
     """M root particles drawn from ``belief`` by weight, and their weights ``(M,)``.
 
-    With discrete states (``entropy_features`` is None) the draw is importance-corrected:
+    With discrete states (``pomdp.discrete_states``) the draw is importance-corrected:
     a state drawn ``n`` times out of M gets weight ``b(state) / n`` per copy, so the
     root's mass on every state equals the runner's belief exactly. Without it a Tiger
     belief of 0.5 would sample as, say, 19 vs 13 particles, making a door look worth
@@ -144,7 +147,7 @@ def root_particles(
     """
     idx = belief.sample_indices(rng, m).tolist()
     states = [belief.states[i] for i in idx]
-    if pomdp.entropy_features(states) is not None:
+    if not pomdp.discrete_states(states):
         return states, np.ones(m)
     mass: dict[Any, float] = {}
     for s, w in zip(belief.states, belief.weights.tolist(), strict=True):
@@ -170,7 +173,9 @@ class TreeResult:
         belief_nodes: belief nodes created.
         action_nodes: action nodes created.
         seconds: search wall time [s].
-        tree: the action tree (for inspection in tests).
+        tree: the action tree (its statistics and observation children).
+        search: the whole search, belief nodes included (``SearchInfo.tree`` with
+            ``keep_tree``).
     """
 
     actions: list[Hashable]
@@ -184,9 +189,11 @@ class TreeResult:
     action_nodes: int
     seconds: float
     tree: ActionTree = field(repr=False)
+    search: BeliefTreeSearch = field(repr=False)
 
     def search_info(self, extra_seconds: float = 0.0, **extra: Any) -> SearchInfo:
-        """The :class:`SearchInfo` of this search, with solver-specific ``extra`` figures."""
+        """The :class:`SearchInfo` of this search, with solver-specific ``extra`` figures
+        (the tree, ``search``, only with the config's ``keep_tree``)."""
         return SearchInfo(
             sims=self.sims,
             seconds=self.seconds + extra_seconds,
@@ -195,30 +202,26 @@ class TreeResult:
             q=self.q,
             visits=self.visits,
             extra={"bonus": self.bonus, **extra},
+            tree=self.search if self.search.config.keep_tree else None,
         )
 
 
-def belief_tree_search(
-    pomdp: Any,
-    config: BeliefTreeConfig,
-    root_states: Sequence[Any],
-    root_weights: np.ndarray,
-    rng: np.random.Generator,
-    *,
-    node_value: NodeValue | None,
-    beta: float,
-    reward_weight: float = 1.0,
-    c: float | None = None,
-    terminal_bonus: Callable[[float], float] | None = None,
-    steps_taken: int = 0,
-) -> TreeResult:
-    """Search from the belief ``(root_states, root_weights)``.
+class BeliefTreeSearch:
+    """One belief-tree search (see the module docstring), its tree as named arrays.
+
+    Per belief node ``h`` (node 0 is the root): ``visits[h]``, the M particle
+    ``states[h]`` and their weights ``weights[h]`` (shape ``(M,)``), ``alive[h]`` (False
+    for particles that reached a terminal state), ``cdf[h]`` (cumulative live weight,
+    for drawing by weight), ``terminal[h]`` (no live weight left), and the transition
+    into it: the belief-expected ``reward[h]``, the ``bonus[h]`` it earned and the node
+    value ``value[h]`` (TRU, entropy, or NaN without a bonus). Action nodes, their
+    statistics and their observation children live in ``tree``
+    (:class:`ActionTree`); ``obs_child`` maps ``(action node, observation key)`` to a
+    child when observations are discrete.
 
     Args:
         pomdp: the generative model.
         config: budgets and widening (its ``beta`` is ignored in favour of ``beta``).
-        root_states: the M root particles.
-        root_weights: their weights, shape ``(M,)``.
         rng: all randomness of the search.
         node_value: belief-dependent value whose reduction earns ``beta`` per unit; None
             for no bonus.
@@ -230,177 +233,191 @@ def belief_tree_search(
             the parent's value (default: none).
         steps_taken: real steps of the episode so far (``horizon="episode"``).
     """
-    budget = Budget(config.sims, config.time_limit)
-    _, c_default, gamma = config.resolved(pomdp)
-    depth = config.search_depth(pomdp, steps_taken)
-    c = c_default if c is None or config.normalized else c
-    space = pomdp.action_space()
-    widening = resolve_widening(config.widening, space, "hpw")
-    step = pomdp.step
-    discrete_obs = pomdp.discrete_observations
-    k_o, al_o = config.k_obs, config.alpha_obs
-    u = UniformStream(rng)
-    tree = ActionTree(
-        space, widening, config.k_action, config.alpha_action, c, rng, u, config.normalized
-    )
-    select, backup, a_action, a_n = tree.select, tree.update, tree.a_action, tree.a_n
-    rollout_actions = list(space.discretized) if widening == "all" else None
-    run_from = make_rollout(
-        pomdp,
-        "random" if config.rollout == "plan" else config.rollout,
-        rollout_actions,
-        space,
-        depth,
-        gamma,
-        rng,
-        u,
-    )
-    m = len(root_states)
-    with_bonus = node_value is not None and beta > 0.0
-    solve_terminal = config.solve_terminal == "always" or (
-        config.solve_terminal == "auto" and discrete_obs
-    )
 
-    b_n: list[int] = []
-    b_states: list[list[Any]] = []
-    b_w: list[np.ndarray] = []
-    b_cdf: list[list[float]] = []
-    b_alive: list[list[bool]] = []
-    b_terminal: list[bool] = []
-    b_reward: list[float] = []
-    b_bonus: list[float] = []
-    b_value: list[float] = []
-    a_generated: list[list[int]] = []
-    obs_lookup: dict[tuple[int, Any], int] = {}
+    def __init__(
+        self,
+        pomdp: GenerativePOMDP,
+        config: BeliefTreeConfig,
+        rng: np.random.Generator,
+        *,
+        node_value: NodeValue | None,
+        beta: float,
+        reward_weight: float = 1.0,
+        c: float | None = None,
+        terminal_bonus: Callable[[float], float] | None = None,
+        steps_taken: int = 0,
+    ) -> None:
+        self.pomdp, self.config, self.rng = pomdp, config, rng
+        _, c_default, self.gamma = config.resolved(pomdp)
+        self.depth = config.search_depth(pomdp, steps_taken)
+        c = c_default if c is None or config.normalized else c
+        space = pomdp.action_space()
+        widening = resolve_widening(config.widening, space, "hpw")
+        self.u = UniformStream(rng)
+        self.tree = ActionTree(
+            space, widening, config.k_action, config.alpha_action, c, rng, self.u,
+            config.normalized,
+        )  # fmt: skip
+        rollout = resolve_rollout(config.rollout, pomdp)
+        self.plan_rollout = rollout == "plan"
+        finite = list(space.discretized) if widening == "all" else None
+        leaf = "random" if self.plan_rollout else rollout
+        self.run_from = make_rollout(
+            pomdp, leaf, finite, space, self.depth, self.gamma, rng, self.u
+        )
+        self.node_value, self.beta, self.reward_weight = node_value, beta, reward_weight
+        self.terminal_bonus = terminal_bonus
+        self.with_bonus = node_value is not None and beta > 0.0
+        self.discrete_obs = pomdp.discrete_observations
+        self.solve_terminal = config.solve_terminal == "always" or (
+            config.solve_terminal == "auto" and self.discrete_obs
+        )
+        self.visits: list[int] = []
+        self.states: list[list[Any]] = []
+        self.weights: list[np.ndarray] = []
+        self.cdf: list[list[float]] = []
+        self.alive: list[list[bool]] = []
+        self.terminal: list[bool] = []
+        self.reward: list[float] = []
+        self.bonus: list[float] = []
+        self.value: list[float] = []
+        self.obs_child: dict[tuple[int, Hashable], int] = {}
 
-    def add_node(states: list[Any], w: np.ndarray, alive: list[bool], r: float, parent: int) -> int:
-        w_alive = [wi if ok else 0.0 for wi, ok in zip(w.tolist(), alive, strict=True)]
+    def add_node(
+        self, states: list[Any], w: np.ndarray, alive: list[bool], r: float, parent: int
+    ) -> int:
+        """Append a belief node reached from ``parent`` (-1 for the root) with reward ``r``."""
         cdf, acc = [], 0.0
-        for wi in w_alive:
-            acc += wi
+        for wi, ok in zip(w.tolist(), alive, strict=True):
+            acc += wi if ok else 0.0
             cdf.append(acc)
         terminal = acc <= 0.0
         # Information that arrives with the episode's end cannot be used: no bonus.
-        value = node_value(states, w) if with_bonus and not terminal else math.nan
-        b_n.append(0)
-        b_states.append(states)
-        b_w.append(w)
-        b_cdf.append(cdf)
-        b_alive.append(alive)
-        b_terminal.append(terminal)
-        b_reward.append(r)
-        b_value.append(value)
+        with_bonus = self.with_bonus
+        value = self.node_value(states, w) if with_bonus and not terminal else math.nan
         if parent < 0 or not with_bonus:
             bonus = 0.0
         elif terminal:
-            bonus = terminal_bonus(b_value[parent]) if terminal_bonus is not None else 0.0
+            tb = self.terminal_bonus
+            bonus = tb(self.value[parent]) if tb is not None else 0.0
         else:
-            bonus = beta * (b_value[parent] - value)
-        b_bonus.append(bonus)
-        tree.add_belief_node()
-        return len(b_n) - 1
+            bonus = self.beta * (self.value[parent] - value)
+        for column, x in (
+            (self.visits, 0), (self.states, states), (self.weights, w), (self.cdf, cdf),
+            (self.alive, alive), (self.terminal, terminal), (self.reward, r),
+            (self.bonus, bonus), (self.value, value),
+        ):  # fmt: skip
+            column.append(x)
+        return self.tree.add_belief_node()
 
-    def draw(h: int) -> int:
-        cdf = b_cdf[h]
-        return min(bisect_right(cdf, u() * cdf[-1]), m - 1)
+    def draw(self, h: int) -> int:
+        """A live particle index of node ``h``, drawn by weight."""
+        cdf = self.cdf[h]
+        return min(bisect_right(cdf, self.u() * cdf[-1]), len(cdf) - 1)
 
-    transition_many, loglik_many = pomdp.transition_many, pomdp.obs_loglik_many
-
-    def expand(h: int, anode: int) -> tuple[int, bool, bool]:
+    def expand(self, h: int, anode: int) -> tuple[int, bool, bool]:
         """The child of ``(h, a)`` reached by one observation; True if it is new; True if
         the action ended the episode for every particle it propagated."""
-        a = a_action[anode]
-        states, w, alive_h = b_states[h], b_w[h], b_alive[h]
-        j = draw(h)
-        sj, o, rj, done_j = step(states[j], a, rng)
-        key = (anode, o) if discrete_obs else None
-        if key is not None and key in obs_lookup:
-            return obs_lookup[key], False, False
+        pomdp, a, rng = self.pomdp, self.tree.a_action[anode], self.rng
+        states, w, alive_h = self.states[h], self.weights[h], self.alive[h]
+        j = self.draw(h)
+        sj, o, rj, done_j = pomdp.step(states[j], a, rng)
+        key = (anode, pomdp.observation_key(o)) if self.discrete_obs else None
+        if key is not None and key in self.obs_child:
+            return self.obs_child[key], False, False
         # Propagate the other live, weighted particles (weightless or terminal ones stay).
         idx = [i for i, wi in enumerate(w.tolist()) if wi > 0.0 and alive_h[i] and i != j]
-        nxt, rew, done = transition_many([states[i] for i in idx], a, rng)
+        nxt, rew, done = pomdp.transition_many([states[i] for i in idx], a, rng)
         idx.append(j)
         nxt.append(sj)
-        rew = np.append(rew, rj)
-        done = np.append(done, done_j)
-        new_states = list(states)
-        for i, s in zip(idx, nxt, strict=True):
-            new_states[i] = s
-        alive = [False] * m
-        for i, d_i in zip(idx, done.tolist(), strict=True):
-            alive[i] = not d_i
+        rew, done = np.append(rew, rj), np.append(done, done_j)
+        new_states, alive = list(states), [False] * len(states)
+        for i, s, d_i in zip(idx, nxt, done.tolist(), strict=True):
+            new_states[i], alive[i] = s, not d_i
         w_prior = w[idx]
-        logw = np.full(m, -np.inf)
-        logw[idx] = np.log(w_prior) + loglik_many(o, nxt, a)
+        logw = np.full(len(states), -np.inf)
+        logw[idx] = np.log(w_prior) + pomdp.obs_loglik_many(o, nxt, a)
         top = logw.max()
         w_new = np.exp(logw - top) if np.isfinite(top) else w.copy()
         w_new /= w_new.sum()
         reward = float(w_prior @ rew / w_prior.sum())
-        child = add_node(new_states, w_new, alive, reward, h)
+        child = self.add_node(new_states, w_new, alive, reward, h)
         if key is not None:
-            obs_lookup[key] = child
+            self.obs_child[key] = child
         return child, True, bool(done.all())
 
-    plan_for = getattr(pomdp, "plan_for", None) if config.rollout == "plan" else None
+    def rollout(self, h: int, d: int) -> float:
+        """Leaf estimate of the new node ``h`` at depth ``d``, from a particle drawn by
+        weight: a random (or heuristic) rollout, or the plan of another particle."""
+        s = self.states[h][self.draw(h)]
+        if not self.plan_rollout:
+            return self.run_from(s, d)
+        plan = self.pomdp.plan_for(self.states[h][self.draw(h)], self.rng)
+        return plan_return(self.pomdp, s, plan, d, self.depth, self.gamma, self.rng)
 
-    def rollout(h: int, d: int) -> float:
-        s = b_states[h][draw(h)]
-        if plan_for is None:
-            return run_from(s, d)
-        total, disc = 0.0, 1.0
-        for a in plan_for(b_states[h][draw(h)], rng)[: depth - d]:
-            s, _, r, done = step(s, a, rng)
-            total += disc * r
-            if done:
-                break
-            disc *= gamma
-        return total
-
-    def simulate(h: int, d: int) -> float:
-        nh = b_n[h]
-        anode, snode = select(h, nh)
-        while len(a_generated) < len(a_n):
-            a_generated.append([])
-        generated = a_generated[anode]
-        if len(generated) <= k_o * a_n[anode] ** al_o:
-            child, new, ends_all = expand(h, anode)
+    def simulate(self, h: int, d: int) -> float:
+        """One descent from belief node ``h`` at depth ``d``; returns its return."""
+        tree, nh = self.tree, self.visits[h]
+        anode, snode = tree.select(h, nh)
+        generated = tree.a_children[anode]
+        cfg = self.config
+        if len(generated) <= cfg.k_obs * tree.a_n[anode] ** cfg.alpha_obs:
+            child, new, ends_all = self.expand(h, anode)
             generated.append(child)
-            if ends_all and solve_terminal:
+            if ends_all and self.solve_terminal:
                 tree.mark_solved(anode, snode)
         else:
-            child, new = generated[int(u() * len(generated))], False
-        total = reward_weight * b_reward[child] + b_bonus[child]
-        if not b_terminal[child] and d + 1 < depth:
-            future = rollout(child, d + 1) if new else simulate(child, d + 1)
-            total += gamma * future
-        b_n[h] = nh + 1
-        backup(anode, snode, total)
+            child, new = generated[int(self.u() * len(generated))], False
+        total = self.reward_weight * self.reward[child] + self.bonus[child]
+        if not self.terminal[child] and d + 1 < self.depth:
+            future = self.rollout(child, d + 1) if new else self.simulate(child, d + 1)
+            total += self.gamma * future
+        self.visits[h] = nh + 1
+        tree.update(anode, snode, total)
         return total
 
-    w0 = np.asarray(root_weights, dtype=float)
-    add_node(list(root_states), w0 / w0.sum(), [True] * m, 0.0, -1)
-    sims = 0
-    while not budget.done(sims):
-        simulate(0, 0)
-        sims += 1
+    def run(self, root_states: Sequence[Any], root_weights: np.ndarray) -> TreeResult:
+        """Search from the belief ``(root_states, root_weights)`` (weights ``(M,)``)."""
+        budget = Budget(self.config.sims, self.config.time_limit)
+        w0 = np.asarray(root_weights, dtype=float)
+        self.add_node(list(root_states), w0 / w0.sum(), [True] * len(w0), 0.0, -1)
+        sims = 0
+        while not budget.done(sims):
+            self.simulate(0, 0)
+            sims += 1
+        tree = self.tree
+        actions, q, visits = tree.root_stats()
+        bonus = np.array(
+            [
+                float(np.mean([self.bonus[ch] for ch in tree.a_children[j]]))
+                if tree.a_children[j]
+                else 0.0
+                for j in tree.b_children[0]
+            ]
+        )
+        return TreeResult(
+            actions=actions,
+            q=q,
+            visits=visits,
+            bonus=bonus,
+            best=tree.best_root_action(),
+            root_value=self.value[0] if self.with_bonus else math.nan,
+            sims=sims,
+            belief_nodes=len(self.visits),
+            action_nodes=tree.size(),
+            seconds=budget.elapsed(),
+            tree=tree,
+            search=self,
+        )
 
-    actions, q, visits = tree.root_stats()
-    bonus = np.array(
-        [
-            float(np.mean([b_bonus[ch] for ch in a_generated[j]])) if a_generated[j] else 0.0
-            for j in tree.b_children[0]
-        ]
-    )
-    return TreeResult(
-        actions=actions,
-        q=q,
-        visits=visits,
-        bonus=bonus,
-        best=tree.best_root_action(),
-        root_value=b_value[0] if with_bonus else math.nan,
-        sims=sims,
-        belief_nodes=len(b_n),
-        action_nodes=tree.size(),
-        seconds=budget.elapsed(),
-        tree=tree,
-    )
+
+def belief_tree_search(
+    pomdp: GenerativePOMDP,
+    config: BeliefTreeConfig,
+    root_states: Sequence[Any],
+    root_weights: np.ndarray,
+    rng: np.random.Generator,
+    **options: Any,
+) -> TreeResult:
+    """``BeliefTreeSearch(pomdp, config, rng, **options).run(root_states, root_weights)``."""
+    return BeliefTreeSearch(pomdp, config, rng, **options).run(root_states, root_weights)

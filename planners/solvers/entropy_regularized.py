@@ -18,7 +18,8 @@ from typing import Any, ClassVar
 import numpy as np
 
 from planners.belief import ParticleBelief
-from planners.entropy import particle_entropy
+from planners.entropy import state_entropy
+from planners.pomdp import GenerativePOMDP, check_pomdp
 from planners.solvers.base import SearchInfo
 from planners.solvers.belief_tree import (
     BeliefTreeConfig,
@@ -29,11 +30,11 @@ from planners.solvers.belief_tree import (
 )
 
 
-def entropy_value(pomdp: Any) -> NodeValue:
+def entropy_value(pomdp: GenerativePOMDP) -> NodeValue:
     """The node value ``H(b)`` [nats] for ``pomdp``'s states."""
 
     def value(states: list[Any], w: np.ndarray) -> float:
-        return particle_entropy(states, w, pomdp.entropy_features(states))
+        return state_entropy(pomdp, states, w)
 
     return value
 
@@ -47,14 +48,15 @@ class EntropyConfig(BeliefTreeConfig):
 
     name: ClassVar[str] = "entropy"
 
-    def planner(self, pomdp: Any) -> EntropyPlanner:
+    def planner(self, pomdp: GenerativePOMDP) -> EntropyPlanner:
         return EntropyPlanner(self, pomdp)
 
 
 class EntropyPlanner(EpisodeSteps):
     """Belief-tree search with reward ``R + beta * (H(b) - H(b'))``."""
 
-    def __init__(self, config: EntropyConfig, pomdp: Any) -> None:
+    def __init__(self, config: EntropyConfig, pomdp: GenerativePOMDP) -> None:
+        check_pomdp(pomdp)
         self.config = config
         self.pomdp = pomdp
         self.value = entropy_value(pomdp)

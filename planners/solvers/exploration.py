@@ -1,6 +1,7 @@
 """UCB at a belief node: the paper's fixed constant, or a scale-free normalised term.
 
-Every tree solver picks the child to simulate with :func:`ucb_select`. Its
+Every tree solver picks the child to simulate with :func:`ucb_select`, and its decision
+at the root with :func:`best_index`. Its
 ``exploration`` config field chooses the score of a visited child ``j`` of a node
 visited ``N`` times:
 
@@ -28,6 +29,8 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+
+import numpy as np
 
 from planners.errors import ConfigError, check_positive_float
 
@@ -89,3 +92,11 @@ def ucb_select(
         if v > best_v:
             best_v, best = v, j
     return best
+
+
+def best_index(q: np.ndarray, visits: np.ndarray) -> int | None:
+    """The root's decision: the index of the visited child with the highest value
+    (ties: the first), or None when no child was visited. Shapes ``(A,)``."""
+    if len(visits) == 0 or not np.any(visits > 0):
+        return None
+    return int(np.argmax(np.where(visits > 0, q, -np.inf)))

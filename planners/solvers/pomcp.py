@@ -5,12 +5,14 @@ paper's baseline does: actions come from the domain's documented discretisation
 (``ActionSpace.discretized``) and observations are binned on a grid of width
 ``obs_bin`` per dimension, so that repeated histories share a node.
 
-The tree is flat arrays indexed by node id (:class:`POMCPTree`): per belief node its
-visit count and the id of its first action node (the node's actions are contiguous);
-per action node its visit count and value. Children of an action node are found in
-one dict keyed by ``(action node, observation key)``. Nodes are expanded lazily: a
-history seen for the first time gets a node and a rollout; its action slots are
-allocated on its second visit. Root states are drawn from the runner's particle
+The tree is flat arrays indexed by node id (:class:`POMCPTree`): the action nodes,
+their visit counts and values on the :class:`ActionTree` every tree solver shares
+(``"all"``: every action of the finite set, UCB by
+:func:`planners.solvers.exploration.ucb_select`), per belief node its visit count.
+Children of an action node are found in one dict keyed by ``(action node,
+observation key)`` (``pomdp.observation_key``, binned on continuous domains). Nodes
+are expanded lazily: a history seen for the first time gets a node and a rollout; its
+action nodes are created on its second visit. Root states are drawn from the runner's particle
 belief. By default the tree is rebuilt at every decision (the published algorithm as
 Table I runs it); ``reuse_tree`` keeps the subtree under the executed action and the
 real observation (:mod:`planners.solvers.reuse`). ``exploration`` chooses the UCB
@@ -22,13 +24,15 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Hashable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
 
 from planners.belief import ParticleBelief
 from planners.errors import check_positive_float
+from planners.pomdp import GenerativePOMDP, check_pomdp
+from planners.solvers.action_tree import ActionTree
 from planners.solvers.base import (
     Budget,
     RootSampler,
@@ -36,7 +40,7 @@ from planners.solvers.base import (
     TreeSearchConfig,
     UniformStream,
 )
-from planners.solvers.exploration import ucb_select
+from planners.solvers.exploration import best_index
 from planners.solvers.reuse import check_reuse, particle_disagreement
 from planners.solvers.rollout import check_rollout, domain_policy, make_rollout
 
@@ -78,84 +82,83 @@ class POMCPConfig(TreeSearchConfig):
         check_rollout(self.rollout)
         check_reuse(self.reuse_tree, self.reuse_tolerance)
 
-    def planner(self, pomdp: Any) -> POMCPPlanner:
+    def planner(self, pomdp: GenerativePOMDP) -> POMCPPlanner:
         return POMCPPlanner(self, pomdp)
 
 
-def observation_key(pomdp: Any, obs_bin: float) -> Callable[[Any], Hashable] | None:
-    """The function mapping observations to tree keys (None: use them as they are)."""
+def observation_bins(pomdp: GenerativePOMDP, obs_bin: float) -> Callable[[Any], Hashable]:
+    """The function mapping observations to tree keys: the domain's
+    ``observation_key`` with discrete observations, else that key binned on a grid of
+    width ``obs_bin`` per dimension (the key must then be a number or a flat tuple of
+    numbers, as the default key of a 1-d numpy array is)."""
+    key_of = pomdp.observation_key
     if pomdp.discrete_observations:
-        return None
+        return key_of
     inv = 1.0 / obs_bin
 
-    def key(o: Any) -> Hashable:
-        if isinstance(o, tuple | list | np.ndarray):
-            return tuple(math.floor(x * inv) for x in o)
-        return math.floor(o * inv)
+    def binned(o: Any) -> Hashable:
+        k = key_of(o)
+        if isinstance(k, tuple):
+            return tuple(math.floor(x * inv) for x in k)
+        return math.floor(k * inv)  # type: ignore[operator]
 
-    return key
+    return binned
 
 
-@dataclass
 class POMCPTree:
-    """A POMCP tree as flat lists; belief node 0 is the root.
+    """A POMCP tree: action nodes on the shared :class:`ActionTree` (every action of the
+    finite set expanded at a node's first selection), belief nodes as named lists;
+    belief node 0 is the root.
 
     Attributes:
-        b_n: visits per belief node.
-        b_first: first action node per belief node (-1 until its second visit).
-        a_n: visits per action node.
-        a_q: value per action node.
+        actions: the action nodes and their statistics.
+        visits: visits per belief node.
         children: ``(action node, observation key) -> belief node``.
         particles: for the root's grandchildren (the belief nodes one step down), the
             next states the simulations brought there (filled only with ``reuse_tree``).
     """
 
-    b_n: list[int]
-    b_first: list[int]
-    a_n: list[int]
-    a_q: list[float]
-    children: dict[tuple[int, Hashable], int] = field(default_factory=dict)
-    particles: dict[int, list[Any]] = field(default_factory=dict)
+    def __init__(self, actions: ActionTree) -> None:
+        self.actions = actions
+        self.visits: list[int] = []
+        self.children: dict[tuple[int, Hashable], int] = {}
+        self.particles: dict[int, list[Any]] = {}
 
-    @classmethod
-    def fresh(cls, n_actions: int) -> POMCPTree:
-        """A root whose action slots are allocated."""
-        return cls([0], [0], [0] * n_actions, [0.0] * n_actions)
+    def add_node(self) -> int:
+        """Append a belief node; returns its id."""
+        self.visits.append(0)
+        return self.actions.add_belief_node()
 
     @property
     def size(self) -> int:
         """Belief nodes + action nodes."""
-        return len(self.b_n) + len(self.a_n)
+        return len(self.visits) + self.actions.size()
 
     def child(self, action_index: int, obs_key: Hashable) -> int | None:
         """The root's belief child under (action index, observation key), if any."""
-        first = self.b_first[0]
-        if first < 0:
-            return None
-        return self.children.get((first + action_index, obs_key))
+        root = self.actions.b_children[0]
+        return self.children.get((root[action_index], obs_key)) if root else None
 
-    def subtree(self, h: int, n_actions: int) -> POMCPTree:
+    def subtree(self, h: int) -> POMCPTree:
         """A copy of the subtree under belief node ``h``, renumbered breadth-first."""
+        old = self.actions
         below: dict[int, list[tuple[Hashable, int]]] = {}
-        for (ai, key), child in self.children.items():
-            below.setdefault(ai, []).append((key, child))
-        out = POMCPTree([], [], [], [])
+        for (anode, key), child in self.children.items():
+            below.setdefault(anode, []).append((key, child))
+        out = POMCPTree(old.empty_like())
+        new = out.actions
         queue, head = [h], 0
         while head < len(queue):
-            old = queue[head]
+            src = queue[head]
             head += 1
-            out.b_n.append(self.b_n[old])
-            first = self.b_first[old]
-            if first < 0:
-                out.b_first.append(-1)
+            dst = out.add_node()
+            out.visits[dst] = self.visits[src]
+            if not old.b_children[src]:
                 continue
-            new_first = len(out.a_n)
-            out.b_first.append(new_first)
-            out.a_n.extend(self.a_n[first : first + n_actions])
-            out.a_q.extend(self.a_q[first : first + n_actions])
-            for j in range(n_actions):
-                for key, child in below.get(first + j, ()):
-                    out.children[(new_first + j, key)] = len(queue)
+            for j, anode in zip(new.expand_all(dst), old.b_children[src], strict=True):
+                new.a_n[j], new.a_q[j] = old.a_n[anode], old.a_q[anode]
+                for key, child in below.get(anode, ()):
+                    out.children[(j, key)] = len(queue)
                     queue.append(child)
         return out
 
@@ -163,12 +166,13 @@ class POMCPTree:
 class POMCPPlanner:
     """A POMCP search; with ``reuse_tree`` it keeps its tree between decisions."""
 
-    def __init__(self, config: POMCPConfig, pomdp: Any) -> None:
+    def __init__(self, config: POMCPConfig, pomdp: GenerativePOMDP) -> None:
+        check_pomdp(pomdp)
         self.config = config
         self.pomdp = pomdp
         self.actions = list(pomdp.action_space().discretized)
         self.depth, self.c, self.gamma = config.resolved(pomdp)
-        self.obs_key = observation_key(pomdp, config.obs_bin)
+        self.obs_key = observation_bins(pomdp, config.obs_bin)
         if config.rollout == "heuristic":
             domain_policy(pomdp)  # a domain without one fails here, not mid-episode
         self._tree: POMCPTree | None = None
@@ -179,70 +183,66 @@ class POMCPPlanner:
         """Record the executed action and the real observation (``reuse_tree``, ``horizon``)."""
         self.steps_taken += 1
         if self.config.reuse_tree and action in self.actions:
-            key = observation if self.obs_key is None else self.obs_key(observation)
+            key = self.obs_key(observation)
             self._executed = (self.actions.index(action), key)
 
-    def _start_tree(self, belief: ParticleBelief) -> tuple[POMCPTree, float]:
+    def _fresh(self, rng: np.random.Generator, u: UniformStream) -> POMCPTree:
+        cfg, space = self.config, self.pomdp.action_space()
+        # "all": every action of the discretised set; k and alpha are unused there.
+        tree = POMCPTree(ActionTree(space, "all", 1.0, 0.0, self.c, rng, u, cfg.normalized))
+        tree.add_node()
+        return tree
+
+    def _start_tree(
+        self, belief: ParticleBelief, rng: np.random.Generator, u: UniformStream
+    ) -> tuple[POMCPTree, float]:
         """The tree to search from, and the disagreement of a kept subtree (NaN if none)."""
         old, executed = self._tree, self._executed
         self._tree, self._executed = None, None
         if old is None or executed is None:
-            return POMCPTree.fresh(len(self.actions)), math.nan
+            return self._fresh(rng, u), math.nan
         h = old.child(*executed)
         if h is None:
-            return POMCPTree.fresh(len(self.actions)), math.nan
+            return self._fresh(rng, u), math.nan
         gap = particle_disagreement(self.pomdp, old.particles.get(h, []), belief)
         if gap > self.config.reuse_tolerance:
-            return POMCPTree.fresh(len(self.actions)), gap
-        return old.subtree(h, len(self.actions)), gap
+            return self._fresh(rng, u), gap
+        return old.subtree(h), gap
 
     def act(self, belief: ParticleBelief, rng: np.random.Generator) -> tuple[Hashable, SearchInfo]:
-        cfg = self.config
+        cfg, pomdp = self.config, self.pomdp
         budget = Budget(cfg.sims, cfg.time_limit)
-        tree, gap = self._start_tree(belief)
-        reused = tree.b_n[0]
-        actions = self.actions
-        n_actions = len(actions)
-        depth, c, gamma = cfg.search_depth(self.pomdp, self.steps_taken), self.c, self.gamma
-        normalized = cfg.normalized
-        step = self.pomdp.step
-        obs_key = self.obs_key
         u = UniformStream(rng)
-        rollout = make_rollout(
-            self.pomdp, cfg.rollout, actions, self.pomdp.action_space(), depth, gamma, rng, u
-        )
-        b_n, b_first, a_n, a_q, children = tree.b_n, tree.b_first, tree.a_n, tree.a_q, tree.children
+        tree, gap = self._start_tree(belief, rng, u)
+        reused = tree.visits[0]
+        depth, gamma = cfg.search_depth(pomdp, self.steps_taken), self.gamma
+        step, obs_key = pomdp.step, self.obs_key
+        space = pomdp.action_space()
+        rollout = make_rollout(pomdp, cfg.rollout, self.actions, space, depth, gamma, rng, u)
+        nodes = tree.actions
+        select, backup, a_action = nodes.select, nodes.update, nodes.a_action
+        b_n, children, add_belief = tree.visits, tree.children, nodes.add_belief_node
         particles = tree.particles if cfg.reuse_tree else None
-        zeros_i = [0] * n_actions
-        zeros_f = [0.0] * n_actions
 
         def simulate(s: Any, h: int, d: int) -> float:
-            first = b_first[h]
-            if first < 0:
-                first = b_first[h] = len(a_n)
-                a_n.extend(zeros_i)
-                a_q.extend(zeros_f)
             nh = b_n[h]
-            ai = ucb_select(range(first, first + n_actions), a_q, a_n, nh, c, normalized)
-            s2, o, r, done = step(s, actions[ai - first], rng)
+            anode, _ = select(h, nh)
+            s2, o, r, done = step(s, a_action[anode], rng)
             if done or d + 1 >= depth:
                 total = r
             else:
-                key = (ai, o if obs_key is None else obs_key(o))
+                key = (anode, obs_key(o))
                 h2 = children.get(key)
                 if particles is not None and d == 0:
                     particles.setdefault(len(b_n) if h2 is None else h2, []).append(s2)
                 if h2 is None:
-                    children[key] = len(b_n)
-                    b_n.append(0)
-                    b_first.append(-1)
+                    b_n.append(0)  # POMCPTree.add_node, inlined on this hot path
+                    children[key] = add_belief()
                     total = r + gamma * rollout(s2, d + 1)
                 else:
                     total = r + gamma * simulate(s2, h2, d + 1)
             b_n[h] = nh + 1
-            n = a_n[ai] + 1
-            a_n[ai] = n
-            a_q[ai] += (total - a_q[ai]) / n
+            backup(anode, -1, total)
             return total
 
         sample_root = RootSampler(belief, rng)
@@ -251,29 +251,21 @@ class POMCPPlanner:
             simulate(sample_root(), 0, 0)
             sims += 1
 
-        first = b_first[0]
-        if first < 0:  # a kept root that was reached once and no time was left to expand it
-            q, visits = np.zeros(n_actions), np.zeros(n_actions, dtype=np.int64)
-        else:
-            q = np.array(a_q[first : first + n_actions])
-            visits = np.array(a_n[first : first + n_actions], dtype=np.int64)
-        best = _best_root_action(q, visits)
+        if nodes.b_children[0]:  # the finite set, in order
+            _, q, visits = nodes.root_stats()
+        else:  # a kept root that was reached once and no time was left to expand it
+            q, visits = np.zeros(len(self.actions)), np.zeros(len(self.actions), dtype=np.int64)
+        best = best_index(q, visits) or 0
         if cfg.reuse_tree:
             self._tree = tree
         info = SearchInfo(
             sims=sims,
             seconds=budget.elapsed(),
             tree_nodes=tree.size,
-            actions=list(actions),
+            actions=list(self.actions),
             q=q,
             visits=visits,
             extra={"reused_visits": reused, "reuse_disagreement": gap} if cfg.reuse_tree else {},
+            tree=tree if cfg.keep_tree else None,
         )
-        return actions[best], info
-
-
-def _best_root_action(q: np.ndarray, visits: np.ndarray) -> int:
-    """Index of the visited root action with the highest value (ties: the first)."""
-    if not np.any(visits > 0):
-        return 0
-    return int(np.argmax(np.where(visits > 0, q, -np.inf)))
+        return self.actions[best], info

@@ -15,11 +15,13 @@ space when it has continuous parameters and every action on a finite space;
 ``"hpw"`` swaps in STRUG's hierarchical widening so its effect alone can be measured.
 Rollouts are uniformly random unless ``rollout="heuristic"``.
 
-Storage is flat lists indexed by node id. Per belief node: visits, the observation,
-and its particles (states, rewards, terminal flags, cumulative weights for O(log n)
-sampling). Per action node (beside the ActionTree's statistics): the list of
-observation children generated, with repeats, so that a uniform pick from it is a
-pick proportional to how often each observation was generated.
+Storage is flat lists indexed by node id (:class:`POMCPOWTree`). Per belief node:
+visits, the observation, and its particles (states, rewards, terminal flags,
+cumulative weights for O(log n) sampling). Per action node, in the
+:class:`ActionTree`: its statistics and the list of observation children generated,
+with repeats, so that a uniform pick from it is a pick proportional to how often each
+observation was generated. Observation children are keyed by
+``pomdp.observation_key(o)``, so numpy observations are fine.
 """
 
 from __future__ import annotations
@@ -34,6 +36,7 @@ import numpy as np
 
 from planners.belief import ParticleBelief
 from planners.errors import check_positive_float
+from planners.pomdp import GenerativePOMDP, check_pomdp
 from planners.solvers.action_tree import ActionTree, check_widening, resolve_widening
 from planners.solvers.base import (
     Budget,
@@ -87,14 +90,15 @@ class POMCPOWConfig(TreeSearchConfig):
         check_positive_float("k_obs", self.k_obs)
         check_positive_float("alpha_obs", self.alpha_obs, allow_zero=True, upper=1.0)
 
-    def planner(self, pomdp: Any) -> POMCPOWPlanner:
+    def planner(self, pomdp: GenerativePOMDP) -> POMCPOWPlanner:
         return POMCPOWPlanner(self, pomdp)
 
 
 class POMCPOWPlanner:
     """A POMCPOW search, rebuilt at every ``act`` call."""
 
-    def __init__(self, config: POMCPOWConfig, pomdp: Any) -> None:
+    def __init__(self, config: POMCPOWConfig, pomdp: GenerativePOMDP) -> None:
+        check_pomdp(pomdp)
         self.config = config
         self.pomdp = pomdp
         self.space = pomdp.action_space()
@@ -111,64 +115,54 @@ class POMCPOWPlanner:
     def act(self, belief: ParticleBelief, rng: np.random.Generator) -> tuple[Hashable, SearchInfo]:
         cfg = self.config
         budget = Budget(cfg.sims, cfg.time_limit)
-        step, loglik = self.pomdp.step, self.pomdp.obs_loglik
-        space = self.space
-        depth, gamma = cfg.search_depth(self.pomdp, self.steps_taken), self.gamma
+        pomdp, space = self.pomdp, self.space
+        step, loglik, obs_key = pomdp.step, pomdp.obs_loglik, pomdp.observation_key
+        depth, gamma = cfg.search_depth(pomdp, self.steps_taken), self.gamma
         k_o, al_o = cfg.k_obs, cfg.alpha_obs
         u = UniformStream(rng)
         exp = math.exp
-        tree = ActionTree(
+        actions = ActionTree(
             space, self.widening, cfg.k_action, cfg.alpha_action, self.c, rng, u, cfg.normalized
         )
-        select, backup, a_action, a_n = tree.select, tree.update, tree.a_action, tree.a_n
-        rollout_actions = list(space.discretized) if self.widening == "all" else None
-        rollout = make_rollout(
-            self.pomdp, cfg.rollout, rollout_actions, space, depth, gamma, rng, u
+        tree = POMCPOWTree(actions)
+        select, backup, a_action, a_n = (
+            actions.select,
+            actions.update,
+            actions.a_action,
+            actions.a_n,
         )
-
-        # Belief (observation) nodes.
-        b_n: list[int] = []
-        b_obs: list[Any] = []
-        b_states: list[list[Any]] = []
-        b_rewards: list[list[float]] = []
-        b_done: list[list[bool]] = []
-        b_cdf: list[list[float]] = []
-        a_generated: list[list[int]] = []
-        obs_lookup: dict[tuple[int, Any], int] = {}
-
-        def new_belief_node(o: Any) -> int:
-            b_n.append(0)
-            b_obs.append(o)
-            b_states.append([])
-            b_rewards.append([])
-            b_done.append([])
-            b_cdf.append([])
-            tree.add_belief_node()
-            return len(b_n) - 1
+        a_children, obs_child, add_node = actions.a_children, tree.obs_child, tree.add_node
+        b_n, b_obs, b_states, b_rewards, b_done, b_cdf = (
+            tree.visits,
+            tree.obs,
+            tree.states,
+            tree.rewards,
+            tree.done,
+            tree.cdf,
+        )
+        rollout_actions = list(space.discretized) if self.widening == "all" else None
+        rollout = make_rollout(pomdp, cfg.rollout, rollout_actions, space, depth, gamma, rng, u)
 
         def simulate(s: Any, h: int, d: int) -> float:
             nh = b_n[h]
             anode, snode = select(h, nh)
-            while len(a_generated) < len(a_n):
-                a_generated.append([])
             a = a_action[anode]
-            generated = a_generated[anode]
+            generated = a_children[anode]
             new_node = False
             if len(generated) <= k_o * a_n[anode] ** al_o:
                 sp, o, r, done = step(s, a, rng)
-                key = (anode, o)
-                hao = obs_lookup.get(key)
+                key = (anode, obs_key(o))
+                hao = obs_child.get(key)
                 if hao is None:
                     new_node = True
-                    hao = obs_lookup[key] = new_belief_node(o)
+                    hao = obs_child[key] = add_node(o)
                 generated.append(hao)
             else:
                 sp, _, r, done = step(s, a, rng)
                 hao = generated[int(u() * len(generated))]
             # Add (s', r) to the node's weighted particle set.
-            w = exp(loglik(b_obs[hao], sp, a))
             cdf = b_cdf[hao]
-            cdf.append((cdf[-1] if cdf else 0.0) + w)
+            cdf.append((cdf[-1] if cdf else 0.0) + exp(loglik(b_obs[hao], sp, a)))
             b_states[hao].append(sp)
             b_rewards[hao].append(r)
             b_done[hao].append(done)
@@ -186,43 +180,61 @@ class POMCPOWPlanner:
             backup(anode, snode, total)
             return total
 
-        new_belief_node(None)
+        add_node(None)
         sample_root = RootSampler(belief, rng)
         sims = 0
         while not budget.done(sims):
             simulate(sample_root(), 0, 0)
             sims += 1
 
-        actions, q, visits = tree.root_stats()
-        best = tree.best_root_action()
+        root_actions, q, visits = actions.root_stats()
+        best = actions.best_root_action()
         info = SearchInfo(
             sims=sims,
             seconds=budget.elapsed(),
-            tree_nodes=len(b_n) + tree.size(),
-            actions=actions,
+            tree_nodes=len(b_n) + actions.size(),
+            actions=root_actions,
             q=q,
             visits=visits,
-            extra={"tree": TreeCounts(b_n, tree.b_children, a_n, a_generated)},
+            tree=tree if cfg.keep_tree else None,
         )
         return (best if best is not None else space.sample(rng)), info
 
 
-@dataclass(frozen=True)
-class TreeCounts:
-    """Read-only counts of a finished tree (for tests and diagnostics).
+class POMCPOWTree:
+    """A POMCPOW tree: the action nodes (:class:`ActionTree`, their observation children
+    in ``actions.a_children``) and, per belief (observation) node, named lists.
 
     Attributes:
-        belief_visits: N(h) per belief node.
-        belief_children: action-node ids per belief node.
-        action_visits: N(ha) per action node.
-        action_generated: observation-node ids generated per action node (with repeats).
+        actions: the action nodes, their statistics and widening.
+        visits: N(h) per belief node (node 0 is the root).
+        obs: the observation of each belief node (None at the root).
+        states: its particles s'.
+        rewards: the reward of the step that produced each particle.
+        done: whether that step ended the episode, per particle.
+        cdf: cumulative particle weights Z(o | s', a), for drawing by weight.
+        obs_child: ``(action node, observation key) -> belief node``.
     """
 
-    belief_visits: list[int]
-    belief_children: list[list[int]]
-    action_visits: list[int]
-    action_generated: list[list[int]]
+    def __init__(self, actions: ActionTree) -> None:
+        self.actions = actions
+        self.visits: list[int] = []
+        self.obs: list[Any] = []
+        self.states: list[list[Any]] = []
+        self.rewards: list[list[float]] = []
+        self.done: list[list[bool]] = []
+        self.cdf: list[list[float]] = []
+        self.obs_child: dict[tuple[int, Hashable], int] = {}
+
+    def add_node(self, o: Any) -> int:
+        """Append an empty belief node for observation ``o``; returns its id."""
+        for column, x in (
+            (self.visits, 0), (self.obs, o), (self.states, []), (self.rewards, []),
+            (self.done, []), (self.cdf, []),
+        ):  # fmt: skip
+            column.append(x)
+        return self.actions.add_belief_node()
 
     def obs_children(self, anode: int) -> int:
         """Number of distinct observation children of action node ``anode``."""
-        return len(set(self.action_generated[anode])) if anode < len(self.action_generated) else 0
+        return len(set(self.actions.a_children[anode]))

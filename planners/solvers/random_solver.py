@@ -5,11 +5,12 @@ from __future__ import annotations
 import time
 from collections.abc import Hashable
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import ClassVar
 
 import numpy as np
 
 from planners.belief import ParticleBelief
+from planners.pomdp import GenerativePOMDP, check_pomdp
 from planners.solvers.base import SearchInfo, SolverConfig
 
 
@@ -22,14 +23,15 @@ class RandomConfig(SolverConfig):
 
     name: ClassVar[str] = "random"
 
-    def planner(self, pomdp: Any) -> RandomPlanner:
+    def planner(self, pomdp: GenerativePOMDP) -> RandomPlanner:
         return RandomPlanner(pomdp)
 
 
 class RandomPlanner:
     """Draws a uniform action from the domain's action space."""
 
-    def __init__(self, pomdp: Any) -> None:
+    def __init__(self, pomdp: GenerativePOMDP) -> None:
+        check_pomdp(pomdp)
         self.space = pomdp.action_space()
 
     def act(self, belief: ParticleBelief, rng: np.random.Generator) -> tuple[Hashable, SearchInfo]:

@@ -32,12 +32,15 @@ compatibility matrix is built over them), which the runner's next belief resampl
 from __future__ import annotations
 
 from collections.abc import Hashable, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from planners.belief import ParticleBelief
 from planners.errors import ConfigError, check_positive_float
+
+if TYPE_CHECKING:
+    from planners.pomdp import GenerativePOMDP
 
 #: Bins per dimension when continuous states are compared (quartiles of the belief).
 CONTINUOUS_BINS = 4
@@ -50,10 +53,12 @@ def check_reuse(reuse_tree: object, reuse_tolerance: float) -> None:
     check_positive_float("reuse_tolerance", reuse_tolerance, allow_zero=True, upper=1.0)
 
 
-def particle_disagreement(pomdp: Any, states: Sequence[Any], belief: ParticleBelief) -> float:
+def particle_disagreement(
+    pomdp: GenerativePOMDP, states: Sequence[Any], belief: ParticleBelief
+) -> float:
     """Total-variation distance in [0, 1] between equally weighted ``states`` and ``belief``.
 
-    Discrete states (``pomdp.entropy_features`` is None) are compared state by state.
+    Discrete states (``pomdp.discrete_states``) are compared state by state.
     Continuous ones are compared per feature on the quartile bins of the belief's
     marginal (:data:`CONTINUOUS_BINS` bins), the largest distance over the features
     counting. With few ``states`` the distance carries sampling noise (about
@@ -61,9 +66,8 @@ def particle_disagreement(pomdp: Any, states: Sequence[Any], belief: ParticleBel
     """
     if not states:
         return 1.0
-    features = pomdp.entropy_features(list(states))
     w = belief.weights
-    if features is None:
+    if pomdp.discrete_states(list(states)):
         mass: dict[Hashable, float] = {}
         for s, wi in zip(belief.states, w.tolist(), strict=True):
             mass[s] = mass.get(s, 0.0) + wi
@@ -71,7 +75,7 @@ def particle_disagreement(pomdp: Any, states: Sequence[Any], belief: ParticleBel
         for s in states:
             mass[s] = mass.get(s, 0.0) - share
         return 0.5 * float(sum(abs(v) for v in mass.values()))
-    ours = np.asarray(features, dtype=float)
+    ours = np.asarray(pomdp.entropy_features(list(states)), dtype=float)
     theirs = np.asarray(pomdp.entropy_features(belief.states), dtype=float)
     worst = 0.0
     for k in range(theirs.shape[1]):

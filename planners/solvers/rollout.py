@@ -11,9 +11,13 @@ solver's ``rollout`` config field:
   (``pomdp.rollout_policy()``), which picks actions from the rollout's own actions and
   observations; a domain without one is a :class:`ConfigError`.
 
-The belief-tree solvers add ``"plan"`` (:mod:`planners.solvers.belief_tree`): a
-particle's uncertainty-free plan executed from another particle, both drawn from the
-node's belief; it needs the particle sets those nodes hold.
+The belief-tree solvers add ``"plan"`` (:func:`plan_return`, called by
+:mod:`planners.solvers.belief_tree`): a particle's uncertainty-free plan
+(``pomdp.plan_for``) executed from another particle, both drawn from the node's
+belief; it needs the particle sets those nodes hold. Their ``"auto"`` is ``"plan"``
+when the domain defines its own ``plan_for`` and ``"random"`` otherwise
+(:func:`resolve_rollout`): the default ``plan_for`` is a beam search, affordable for
+the M plans of STRUG's matrix but not once per rollout.
 """
 
 from __future__ import annotations
@@ -24,7 +28,8 @@ from typing import Any
 import numpy as np
 
 from planners.errors import ConfigError
-from planners.pomdp import ActionSpace, RolloutPolicy
+from planners.pomdp import ActionSpace, GenerativePOMDP, RolloutPolicy, provides_plan
+from planners.tru import execute_plan
 
 #: Rollout kinds every tree solver offers.
 ROLLOUTS = ("random", "heuristic")
@@ -39,21 +44,42 @@ def check_rollout(kind: str, choices: Sequence[str] = ROLLOUTS) -> None:
         raise ConfigError(f"rollout must be one of {', '.join(choices)}, got {kind!r}")
 
 
-def domain_policy(pomdp: Any) -> RolloutPolicy:
+def resolve_rollout(kind: str, pomdp: GenerativePOMDP) -> str:
+    """The concrete rollout of ``kind``: ``"auto"`` is ``"plan"`` when ``pomdp`` defines
+    its own ``plan_for``, else ``"random"``; other kinds are returned as they are."""
+    if kind == "auto":
+        return "plan" if provides_plan(pomdp) else "random"
+    return kind
+
+
+def plan_return(
+    pomdp: GenerativePOMDP,
+    s: Any,
+    plan: Sequence[Hashable],
+    d: int,
+    depth: int,
+    gamma: float,
+    rng: np.random.Generator,
+) -> float:
+    """Discounted return of the open-loop ``plan`` executed from ``s`` over the steps
+    ``d .. depth-1`` (the plan is cut there), stopping at a terminal step
+    (:func:`planners.tru.execute_plan`, the loop TRU's matrix runs too)."""
+    return execute_plan(pomdp, s, plan[: depth - d], rng, gamma)[0]
+
+
+def domain_policy(pomdp: GenerativePOMDP) -> RolloutPolicy:
     """``pomdp``'s rollout heuristic, or a :class:`ConfigError` naming the domain."""
-    getter = getattr(pomdp, "rollout_policy", None)
-    policy = getter() if getter is not None else None
+    policy = pomdp.rollout_policy()
     if policy is None:
-        name = getattr(pomdp, "name", type(pomdp).__name__)
         raise ConfigError(
-            f"rollout='heuristic' needs a domain rollout policy, but {name} has none "
+            f"rollout='heuristic' needs a domain rollout policy, but {pomdp.name} has none "
             "(rollout_policy() returned None); use rollout='random'"
         )
     return policy
 
 
 def make_rollout(
-    pomdp: Any,
+    pomdp: GenerativePOMDP,
     kind: str,
     actions: Sequence[Hashable] | None,
     space: ActionSpace,

@@ -11,12 +11,13 @@ from __future__ import annotations
 
 from collections.abc import Hashable
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import ClassVar
 
 import numpy as np
 
 from planners.belief import ParticleBelief
 from planners.errors import check_positive_int
+from planners.pomdp import GenerativePOMDP, check_pomdp
 from planners.solvers.base import SearchInfo
 from planners.solvers.belief_tree import (
     BeliefTreeConfig,
@@ -44,28 +45,30 @@ class STRUGConfig(BeliefTreeConfig):
             (defaults 10, 1/30).
         k_obs, alpha_obs: observation widening (defaults 5, 1/15).
         widening: ``"auto"`` (HPW on hybrid spaces), ``"all"``, ``"dpw"`` or ``"hpw"``.
-        rollout: leaf estimate, ``"plan"`` (default: a particle's uncertainty-free plan
-            executed from another particle, both drawn from the node's belief) or
+        rollout: leaf estimate, ``"auto"`` (default: ``"plan"`` on a domain with its own
+            ``plan_for``, else ``"random"``), ``"plan"`` (a particle's uncertainty-free
+            plan executed from another particle, both drawn from the node's belief) or
             ``"random"`` (the paper's Algorithm 2 as written).
     """
 
     name: ClassVar[str] = "strug"
 
     plan_repeats: int = 3
-    rollout: str = "plan"
+    rollout: str = "auto"
 
     def __post_init__(self) -> None:
         super().__post_init__()
         check_positive_int("plan_repeats", self.plan_repeats)
 
-    def planner(self, pomdp: Any) -> STRUGPlanner:
+    def planner(self, pomdp: GenerativePOMDP) -> STRUGPlanner:
         return STRUGPlanner(self, pomdp)
 
 
 class STRUGPlanner(EpisodeSteps):
     """Compatibility matrix + TRU-guided belief-tree search, rebuilt at every decision."""
 
-    def __init__(self, config: STRUGConfig, pomdp: Any) -> None:
+    def __init__(self, config: STRUGConfig, pomdp: GenerativePOMDP) -> None:
+        check_pomdp(pomdp)
         self.config = config
         self.pomdp = pomdp
 

@@ -44,7 +44,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
-from collections.abc import Iterable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -363,24 +363,3 @@ def load_views(path: Path) -> dict[str, np.ndarray]:
     """The arrays of one shard (leading axis: view), as written by :func:`save_views`."""
     with np.load(path) as data:
         return {k: data[k] for k in data.files}
-
-
-def render_dataset(
-    out: Path,
-    seeds: Iterable[int],
-    views: int = DEFAULT_VIEWS,
-    ranges: ViewRanges | None = None,
-    progress: bool = True,
-) -> tuple[int, int]:
-    """Render every cabinet of ``seeds`` whose shard is missing in ``out``.
-
-    Returns:
-        ``(cabinets rendered now, cabinets already there)``.
-    """
-    from tqdm import tqdm
-
-    seeds = [int(s) for s in seeds]
-    todo = [s for s in seeds if not shard_path(out, s).exists()]
-    for s in tqdm(todo, desc="cabinets", unit="cabinet", disable=not progress):
-        save_views(shard_path(out, s), render_cabinet(s, views, ranges))
-    return len(todo), len(seeds) - len(todo)
