@@ -23,7 +23,6 @@ from planners.errors import (
     ModelError,
     ObservationError,
     PlannersError,
-    StrugError,
     UnknownNameError,
 )
 from planners.pomdp import (
@@ -36,7 +35,6 @@ from planners.pomdp import (
     check_pomdp,
 )
 from planners.solvers import (
-    SOLVER_SUMMARIES,
     SOLVERS,
     ActiveLearningConfig,
     BeliefTreeConfig,
@@ -54,7 +52,6 @@ from planners.solvers import (
 __all__ = [
     "DEFAULT_PARTICLES",
     "SOLVERS",
-    "SOLVER_SUMMARIES",
     "ActionSchema",
     "ActionSpace",
     "ActiveLearningConfig",
@@ -78,7 +75,6 @@ __all__ = [
     "SolverConfig",
     "Step",
     "StepRecord",
-    "StrugError",
     "TreeSearchConfig",
     "UnknownNameError",
     "UpdateInfo",

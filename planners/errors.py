@@ -15,10 +15,6 @@ class PlannersError(Exception):
     """Base class of every error raised on bad input or impossible requests."""
 
 
-#: The name the ``strug`` command line catches: the same class as :class:`PlannersError`.
-StrugError = PlannersError
-
-
 class ConfigError(PlannersError, ValueError):
     """A hyper-parameter or option has an impossible value (negative count, NaN, ...)."""
 

@@ -26,7 +26,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from planners.errors import ConfigError, StrugError, UnknownNameError
+from planners.errors import ConfigError, PlannersError, UnknownNameError
 from planners.solvers import SOLVERS
 from strug_manip.cli_args import (
     Parser,
@@ -346,7 +346,7 @@ def _interrupted(args: argparse.Namespace) -> str:
     if args.command in ("bench", "demo"):
         try:
             n = len(load_results(args.out))
-        except (StrugError, OSError):
+        except (PlannersError, OSError):
             n = 0
         again = (
             "rerun the same command with --resume"
@@ -375,7 +375,7 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
         return COMMANDS[args.command](args)
-    except StrugError as exc:
+    except PlannersError as exc:
         print(f"strug: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

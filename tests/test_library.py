@@ -248,7 +248,6 @@ def test_every_solver_config_is_exported_from_planners() -> None:
 def test_one_error_hierarchy() -> None:
     for name in ("ConfigError", "UnknownNameError", "BeliefError", "ObservationError"):
         assert issubclass(getattr(planners, name), PlannersError)
-    assert planners.StrugError is PlannersError  # the command line's name for it
     assert importlib.util.find_spec("strug_manip.errors") is None
 
 

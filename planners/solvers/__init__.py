@@ -28,16 +28,6 @@ SOLVERS: dict[str, type[SolverConfig]] = {
     "strug": STRUGConfig,
 }
 
-#: One-line descriptions for ``strug list``.
-SOLVER_SUMMARIES: dict[str, str] = {
-    "random": "uniformly random actions (no search)",
-    "pomcp": "POMCP (Silver & Veness 2010); continuous domains discretised",
-    "pomcpow": "POMCPOW (Sunberg & Kochenderfer 2018): double progressive widening",
-    "entropy": "Entropy Regularized: belief-tree search paying beta per nat of entropy reduced",
-    "active": "Active Learning: reduce entropy below a threshold, then plan in the MAP model",
-    "strug": "STRUG: belief-tree search paying beta per unit of task-relevant uncertainty reduced",
-}
-
 
 def make_solver(name: str, overrides: dict[str, Any] | None = None) -> SolverConfig:
     """The config of solver ``name`` with ``overrides`` applied and validated."""
@@ -51,7 +41,6 @@ def make_solver(name: str, overrides: dict[str, Any] | None = None) -> SolverCon
 
 __all__ = [
     "SOLVERS",
-    "SOLVER_SUMMARIES",
     "ActiveLearningConfig",
     "ActiveLearningPlanner",
     "BeliefTreeConfig",

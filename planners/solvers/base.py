@@ -264,18 +264,3 @@ class RootSampler:
         idx = self._buf[self._i]
         self._i += 1
         return self._belief.states[idx]
-
-
-def parse_value(text: str) -> Any:
-    """Parse a ``--set NAME=VALUE`` value: ``none``, booleans, ints, floats, else the string."""
-    low = text.strip().lower()
-    if low in ("none", "null"):
-        return None
-    if low in ("true", "false"):
-        return low == "true"
-    for cast in (int, float):
-        try:
-            return cast(text)
-        except ValueError:
-            pass
-    return text

@@ -30,7 +30,7 @@ import time
 from collections.abc import Callable, Sequence
 from typing import IO, Any
 
-from planners.errors import ConfigError, StrugError
+from planners.errors import ConfigError, PlannersError
 
 Task = tuple[str, str, int]
 Record = Callable[[dict[str, Any]], None]
@@ -179,7 +179,7 @@ def _ray_result(ray: Any, ref: Any) -> dict[str, Any]:
         return ray.get(ref)
     except ray.exceptions.RayTaskError as exc:
         cause = getattr(exc, "cause", None)
-        if isinstance(cause, StrugError):
+        if isinstance(cause, PlannersError):
             raise ConfigError(str(cause)) from None
         raise
 
@@ -219,7 +219,7 @@ def _serve(requests: IO[str], replies: IO[str]) -> None:
 
             reply = {
                 "error": str(exc),
-                "strug_error": isinstance(exc, StrugError),
+                "strug_error": isinstance(exc, PlannersError),
                 "traceback": traceback.format_exc(),
             }
         replies.write(json.dumps(reply) + "\n")
