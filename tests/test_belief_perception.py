@@ -22,7 +22,7 @@ from strug_manip.world.sim import ManipulationWorld
 ROOT = Path(__file__).resolve().parents[1]
 WEIGHTS = ROOT / "models" / "perception" / "articulation_net.pt"
 sys.path.insert(0, str(ROOT / "tools"))
-from eval_perception import evaluate_cabinet, oracle_output  # noqa: E402
+from eval_perception import evaluate_cabinet, oracle_output, summarise, type_unseen  # noqa: E402
 
 
 def _oracle_fusion(views):
@@ -42,6 +42,25 @@ def test_geometry_from_perfect_maps_is_exact() -> None:
         assert r["complete"] and r["support"][0] == r["support"][1]
         assert all(e < 1.0 for _, e in r["axis"]), r["axis"]
         assert all(e < 0.02 for e in r["hinge"]), r["hinge"]
+
+
+def test_unseen_types_are_closed_fronts_of_handle_less_cabinets() -> None:
+    """The evaluation sets apart exactly the fronts whose type no view shows, and counts
+    them inside ``joint_type``."""
+    from strug_manip.objects import generate_cabinet
+
+    bare = next(s for s in range(3000, 3100) if generate_cabinet(s).parts[0].handle == "none")
+    handled = next(s for s in range(3000, 3100) if generate_cabinet(s).parts[0].handle == "bar")
+    part, other = generate_cabinet(bare).parts[0], generate_cabinet(handled).parts[0]
+    assert type_unseen(part, 0.0) and type_unseen(part, 0.02)
+    assert not type_unseen(part, 0.3)  # open: the motion shows the joint
+    assert not type_unseen(other, 0.0)  # a handle's place shows it
+    args = argparse.Namespace(views=2, dropout=0.0, noisy_runs=0, particles=10)
+    res = evaluate_cabinet(bare, args, None, np.random.default_rng(0))
+    out, _ = summarise([res])
+    assert out["joint_type_unseen"]["n"] >= 1  # seed 3001 shows closed bare fronts
+    assert out["joint_type_unseen"]["ok"] <= out["joint_type_unseen"]["n"]
+    assert out["joint_type_unseen"]["n"] <= out["joint_type"]["n"]
 
 
 def test_particles_are_cabinets_the_world_compiles() -> None:
