@@ -155,3 +155,50 @@ def test_place_targets_are_inside_and_open_enough_is_the_targets_rule(cabinets) 
     with pytest.raises(UnknownNameError):
         place_target(door, "link_99", 0.1, T)
     assert not dragged(DRAG_LIMIT) and dragged(DRAG_LIMIT + 1e-6)
+
+
+def _drop_down_flaps(seeds: range) -> list:
+    """(spec, part) of every drop-down flap the generator makes on ``seeds``."""
+    out = []
+    for s in seeds:
+        spec = generate_cabinet(s, kinds=("door",))
+        out += [(spec, p) for p in spec.parts if p.hinge == "bottom"]
+    return out
+
+
+def test_behind_a_drop_down_flap_the_object_comes_in_just_over_its_edge() -> None:
+    """The pitched object comes in CLEARANCE over the open flap's edge (higher, the
+    pitched wrist meets the cell's top), and a cell too low for the pitched object and
+    the palm over it cannot take it (ConfigError naming the heights)."""
+    from strug_manip.control.targets import (
+        CLEARANCE,
+        FLAP_DROP,
+        FLAP_PITCH,
+        HELD_HEIGHT,
+        PALM_ABOVE,
+    )
+    from strug_manip.world.scene import OBJECT_HALF_SIZE
+
+    hx, _, hz = OBJECT_HALF_SIZE
+    pitched = 0.02 + 2 * (hx * np.sin(FLAP_PITCH) + hz * np.cos(FLAP_PITCH)) + PALM_ABOVE
+    assert pitched > HELD_HEIGHT  # a pitched object stands taller than a level one
+    fitted = low = 0
+    for spec, part in _drop_down_flaps(range(40)):
+        q = part.upper - 0.05
+        height = float(part.interior_size[2])
+        if height < pitched + CLEARANCE:
+            with pytest.raises(ConfigError, match=f"x {pitched + CLEARANCE:.3f} m$"):
+                place_target(spec, part.link, q, np.eye(4))
+            low += 1
+            continue
+        panel = part.geoms[0].size
+        edge = float(panel[2]) * max(np.cos(q), 0.0) + float(panel[0])
+        try:
+            t = place_target(spec, part.link, q, np.eye(4))
+        except ConfigError as e:  # too narrow, too shallow, or the flap's edge too high
+            assert "does not pass over it" in str(e) or "free width" in str(e)
+            continue
+        assert t.grasp == "side"
+        assert t.lift == pytest.approx(max(edge + CLEARANCE - FLAP_DROP, 0.0))
+        fitted += 1
+    assert fitted > 0 and low > 0

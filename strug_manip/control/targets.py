@@ -48,6 +48,8 @@ HELD_HEIGHT = 0.0925
 #: 2 cm up), whence it drops flat onto the floor.
 FLAP_PITCH = 0.35
 FLAP_DROP = 0.02 + 0.05 * 0.343
+#: The palm's top above a held object's top [m] (see :data:`HELD_HEIGHT`).
+PALM_ABOVE = 0.0075
 #: Highest start above its place of an object carried into a cell [m].
 MAX_LIFT = 0.15
 
@@ -78,10 +80,15 @@ def _cell_place(
     middle of the part of the opening an open door leaves free (a side door at angle
     ``q`` still covers ``w cos q + t sin q`` of it next to its hinge; a top flap hangs
     ``h cos q + t`` down into it), resting on the floor. It comes in from as high as the
-    free height allows (up to :data:`MAX_LIFT`: over the front edge and a drop-down
-    flap's edge), except under a top flap; behind a drop-down flap it comes in
-    pitched down by :data:`FLAP_PITCH` (the wrist and forearm, out over the open flap,
-    ride higher) and is let go :data:`FLAP_DROP` above the floor, onto which it drops.
+    free height allows (up to :data:`MAX_LIFT`: over the front edge), except under a
+    top flap; behind a drop-down flap it comes in pitched down by :data:`FLAP_PITCH`
+    (the wrist and forearm, out over the open flap, ride higher), :data:`CLEARANCE`
+    over the flap's edge and no higher (the pitched hand's wrist rises behind the
+    object and meets the cell's top edge when it comes in higher), and is let go
+    :data:`FLAP_DROP` above the floor, onto which it drops;
+    the pitched object stands taller than a level one (its near top corner, and the palm
+    over it), and a cell lower than that cannot take it (a level object cannot pass the
+    flap's edge there either).
     """
     center = np.asarray(part.interior_center, dtype=float)
     size = np.asarray(part.interior_size, dtype=float)
@@ -106,19 +113,26 @@ def _cell_place(
             drop, pitch = FLAP_DROP, FLAP_PITCH
             edge = float(panel[2]) * max(np.cos(q), 0.0) + t  # its edge above the floor
     width, height = y_hi - y_lo, top - floor
-    need = (2 * half[0] + INSERT, FINGER_SPAN + 2 * CLEARANCE, HELD_HEIGHT + CLEARANCE)
+    # Height over the floor of the object as let go, with the palm: level, or pitched
+    # (its lowest edge FLAP_DROP - 0.05 * 0.343 = 2 cm up, its near top corner highest).
+    held = HELD_HEIGHT
+    if pitch:
+        held = 0.02 + 2 * (half[0] * np.sin(pitch) + half[2] * np.cos(pitch)) + PALM_ABOVE
+    need = (2 * half[0] + INSERT, FINGER_SPAN + 2 * CLEARANCE, held + CLEARANCE)
     if size[0] < need[0] or width < need[1] or height < need[2]:
         raise ConfigError(
             f"cell {link} leaves {size[0]:.3f} x {width:.3f} x {height:.3f} m (depth, "
             f"free width, free height) at joint position {q:.3f}: the object carried in "
             f"needs {need[0]:.3f} x {need[1]:.3f} x {need[2]:.3f} m"
         )
-    lift = float(np.clip(height - HELD_HEIGHT - CLEARANCE, 0.0, MAX_LIFT)) if lift_ok else 0.0
+    lift = float(np.clip(height - held - CLEARANCE, 0.0, MAX_LIFT)) if lift_ok else 0.0
     if part.hinge == "bottom" and part.joint_type == "revolute" and lift + drop < edge + CLEARANCE:
         raise ConfigError(
             f"flap {link} at {q:.3f} rad stands {edge:.3f} m over its cell's floor: the "
             f"object carried in at most {lift + drop:.3f} m high does not pass over it"
         )
+    if pitch:  # just over the flap's edge: higher, the pitched wrist meets the cell's top
+        lift = max(edge + CLEARANCE - drop, 0.0)
     center = np.array([front - INSERT, 0.5 * (y_lo + y_hi), floor + half[2] + drop])
     return center, lift, pitch
 
