@@ -139,20 +139,24 @@ def true_parts(seed: int, T_world_cab: np.ndarray, fused: FusedCabinet | None) -
     return out
 
 
+#: A part at most this far from closed [m or rad] counts as closed.
+CLOSED = 0.02
+
+
 def _front_kind(part, q: float) -> str:
     """A part as a failure cause names it: ``closed drawer with a bar`` ..."""
     kind = "flap" if part.hinge in ("top", "bottom") else part.kind
-    state = "open" if q > 0.02 else "closed"
+    state = "open" if q > CLOSED else "closed"
     handle = {"none": "without a handle", "bar": "with a bar", "knob": "with a knob"}[part.handle]
     return f"{state} {kind} {handle}"
 
 
 def type_unseen(part, q: float) -> bool:
-    """Whether a view cannot show ``part``'s joint type: a closed front (``q`` <= 0.02 m
-    or rad) in a cabinet without handles. The generator draws each cell's kind
+    """Whether a view cannot show ``part``'s joint type: a closed front (``q`` <=
+    :data:`CLOSED`) in a cabinet without handles. The generator draws each cell's kind
     independently of its size and gives drawer fronts, doors and panels the same board,
     inset and gap, so nothing in the pixels tells them apart; only a probe does."""
-    return q <= 0.02 and part.handle == "none"
+    return q <= CLOSED and part.handle == "none"
 
 
 def hypothesis_joint(h, front) -> tuple[str, np.ndarray, np.ndarray, np.ndarray]:

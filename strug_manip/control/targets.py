@@ -44,10 +44,11 @@ INSERT = 0.08
 #: [m]: the palm's top is 7.5 mm above the object's (the TCP 1 cm above its centre).
 HELD_HEIGHT = 0.0925
 #: Behind a drop-down flap, the object comes in pitched down by this [rad] (its far
-#: end low) and is let go this high above the floor [m] (the tilted box's lowest edge
-#: 2 cm up), whence it drops flat onto the floor.
+#: end low), its lowest edge this high above the floor [m], and is let go with its
+#: centre this much higher than resting [m], whence it drops flat onto the floor.
 FLAP_PITCH = 0.35
-FLAP_DROP = 0.02 + 0.05 * 0.343
+FLAP_LOWEST = 0.02
+FLAP_DROP = FLAP_LOWEST + 0.05 * 0.343
 #: The palm's top above a held object's top [m] (see :data:`HELD_HEIGHT`).
 PALM_ABOVE = 0.0075
 #: Highest start above its place of an object carried into a cell [m].
@@ -114,10 +115,10 @@ def _cell_place(
             edge = float(panel[2]) * max(np.cos(q), 0.0) + t  # its edge above the floor
     width, height = y_hi - y_lo, top - floor
     # Height over the floor of the object as let go, with the palm: level, or pitched
-    # (its lowest edge FLAP_DROP - 0.05 * 0.343 = 2 cm up, its near top corner highest).
+    # (its lowest edge FLAP_LOWEST up, its near top corner highest).
     held = HELD_HEIGHT
     if pitch:
-        held = 0.02 + 2 * (half[0] * np.sin(pitch) + half[2] * np.cos(pitch)) + PALM_ABOVE
+        held = FLAP_LOWEST + 2 * (half[0] * np.sin(pitch) + half[2] * np.cos(pitch)) + PALM_ABOVE
     need = (2 * half[0] + INSERT, FINGER_SPAN + 2 * CLEARANCE, held + CLEARANCE)
     if size[0] < need[0] or width < need[1] or height < need[2]:
         raise ConfigError(
@@ -125,14 +126,14 @@ def _cell_place(
             f"free width, free height) at joint position {q:.3f}: the object carried in "
             f"needs {need[0]:.3f} x {need[1]:.3f} x {need[2]:.3f} m"
         )
-    lift = float(np.clip(height - held - CLEARANCE, 0.0, MAX_LIFT)) if lift_ok else 0.0
-    if part.hinge == "bottom" and part.joint_type == "revolute" and lift + drop < edge + CLEARANCE:
+    highest = float(np.clip(height - held - CLEARANCE, 0.0, MAX_LIFT)) if lift_ok else 0.0
+    if pitch and highest + drop < edge + CLEARANCE:
         raise ConfigError(
             f"flap {link} at {q:.3f} rad stands {edge:.3f} m over its cell's floor: the "
-            f"object carried in at most {lift + drop:.3f} m high does not pass over it"
+            f"object carried in at most {highest + drop:.3f} m high does not pass over it"
         )
-    if pitch:  # just over the flap's edge: higher, the pitched wrist meets the cell's top
-        lift = max(edge + CLEARANCE - drop, 0.0)
+    # Behind a drop-down flap, just over its edge: higher, the pitched wrist meets the top.
+    lift = max(edge + CLEARANCE - drop, 0.0) if pitch else highest
     center = np.array([front - INSERT, 0.5 * (y_lo + y_hi), floor + half[2] + drop])
     return center, lift, pitch
 
