@@ -13,7 +13,13 @@ import numpy as np
 import pytest
 
 from planners.errors import ConfigError, UnknownNameError
-from strug_manip.control import flip_fingers, handle_grasps, held_grasp, place_target
+from strug_manip.control import (
+    flip_fingers,
+    handle_grasps,
+    held_grasp,
+    place_target,
+    place_targets,
+)
 from strug_manip.control.grasps import (
     FACE_CLEARANCE,
     MIN_KNOB_GRIP,
@@ -23,6 +29,7 @@ from strug_manip.control.grasps import (
     knob_end,
     max_back_off,
 )
+from strug_manip.control.targets import FINGER_SPAN
 from strug_manip.domains.manipulation.rules import DRAG_LIMIT, dragged, inside, open_enough
 from strug_manip.objects.generator import axis_angle, generate_cabinet
 from strug_manip.objects.hypotheses import check_pose
@@ -155,6 +162,28 @@ def test_place_targets_are_inside_and_open_enough_is_the_targets_rule(cabinets) 
     with pytest.raises(UnknownNameError):
         place_target(door, "link_99", 0.1, T)
     assert not dragged(DRAG_LIMIT) and dragged(DRAG_LIMIT + 1e-6)
+
+
+def test_a_drawer_offers_a_second_place_nearer_its_front_wall(cabinets) -> None:
+    """The second target of an open drawer keeps the object inside, CLEARANCE from the
+    front wall (farther from the fronts above); a cell offers one target."""
+    from strug_manip.control.targets import CLEARANCE
+
+    spec, T = cabinets["drawers_11"], np.eye(4)
+    part = spec.part("link_1")
+    q = 0.9 * part.upper
+    first, second = place_targets(spec, "link_1", q, T)
+    assert first.grasp == second.grasp == "top"
+    np.testing.assert_array_equal(first.p[:3, :3], second.p[:3, :3])
+    # The cabinet's x points out of its front: the second is nearer the drawer's front.
+    assert second.p[0, 3] > first.p[0, 3] + 1e-3
+    assert second.p[1:3, 3] == pytest.approx(first.p[1:3, 3])
+    assert inside(spec, "link_1", q, T, second.p)
+    front_wall = part.point_at(part.interior_center, q)[0] + part.interior_size[0] / 2
+    reach = 0.05 if abs(second.p[0, 0]) > 0.5 else FINGER_SPAN / 2  # along or across
+    assert second.p[0, 3] == pytest.approx(front_wall - CLEARANCE - reach)
+    assert place_target(spec, "link_1", q, T).p.tobytes() == first.p.tobytes()
+    assert len(place_targets(cabinets["mixed_17"], "link_5", 1.4, T)) == 1
 
 
 def _drop_down_flaps(seeds: range) -> list:

@@ -17,8 +17,9 @@ movable part with a handle (a flat front cannot be grasped):
   the cabinet not dragged (a part whose cell cannot take the object even open to its
   limit: moved 90 % of the skill's travel); failures are counted by cause;
 - the **chain** from there when it opened: Pick (with the grasp the part's target
-  needs) then Place into the drawer / behind the door; a success is the object resting
-  inside the part (:func:`~strug_manip.domains.manipulation.rules.inside`);
+  needs) then Place into the drawer / behind the door (the targets of
+  :func:`place_targets` in turn until one is not ``ik_infeasible``); a success is the
+  object resting inside the part (:func:`~strug_manip.domains.manipulation.rules.inside`);
 - **wrong models**: the two likeliest confusions of the part's kinematics (a drawer
   taken for a door hinged left or right; a side door for a drawer or a door hinged on
   the other side; a flap for a drawer or a flap hinged on the other edge), each
@@ -69,7 +70,7 @@ from strug_manip.control import (
     PullV,
     Push,
     handle_grasps,
-    place_target,
+    place_targets,
 )
 from strug_manip.control.params import DEFAULT_PARAMS
 from strug_manip.domains.manipulation.rules import dragged, inside, open_enough
@@ -211,11 +212,14 @@ def evaluate_part(world, twin, spec, part, ctx) -> dict:
     twins = []
     twins.append(compare(out, *simulate_twice(twin, skill), joint_name, unit))
     if ok and wide:
-        tgt = place_target(spec, part.link, q, T_now)
-        pick = Pick("object", tgt.grasp).run(world, ctx=ctx)
+        tgts = place_targets(spec, part.link, q, T_now)
+        pick = Pick("object", tgts[0].grasp).run(world, ctx=ctx)
         chain = {"pick": str(pick.status), "place": None, "ok": False}
         if pick.ok:
-            place = Place("object", tgt.p, tgt.lift).run(world, ctx=ctx)
+            for tgt in tgts:  # the next where no base placement reaches one (no motion)
+                place = Place("object", tgt.p, tgt.lift).run(world, ctx=ctx)
+                if place.status != "ik_infeasible":
+                    break
             chain["place"] = str(place.status)
             q2 = world.part_positions()[joint_name]
             T2 = world.body_pose(world.scene.cabinet_prefix + world.scene.cabinet.root)

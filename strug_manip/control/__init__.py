@@ -31,7 +31,7 @@ from strug_manip.control.skills import (
     Skill,
     part_at,
 )
-from strug_manip.control.targets import PlaceTarget, place_target
+from strug_manip.control.targets import PlaceTarget, place_target, place_targets
 from strug_manip.control.twin import PlanningTwin, run_batch
 
 __all__ = [
@@ -60,5 +60,6 @@ __all__ = [
     "held_grasp",
     "part_at",
     "place_target",
+    "place_targets",
     "run_batch",
 ]

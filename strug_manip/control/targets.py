@@ -140,7 +140,30 @@ def _cell_place(
 
 def place_target(spec: CabinetSpec, link: str, q: float, T_world_object: np.ndarray) -> PlaceTarget:
     """The pose to put the object into part ``link`` of ``spec`` at joint position ``q``
-    [m or rad], the cabinet frame at ``T_world_object`` (4, 4).
+    [m or rad], the cabinet frame at ``T_world_object`` (4, 4): the first of
+    :func:`place_targets`.
+
+    Raises:
+        UnknownNameError: no part ``link``.
+        ConfigError: the part has no interior (a panel), or the object does not fit
+            (a drawer not out far enough, a cell too small), the sizes named.
+    """
+    return place_targets(spec, link, q, T_world_object)[0]
+
+
+def place_targets(
+    spec: CabinetSpec, link: str, q: float, T_world_object: np.ndarray
+) -> tuple[PlaceTarget, ...]:
+    """The poses to put the object into part ``link`` of ``spec`` at joint position
+    ``q`` [m or rad], the cabinet frame at ``T_world_object`` (4, 4), in the order to
+    try them (the next where :class:`~strug_manip.control.skills.Place` finds no base
+    placement: ``ik_infeasible`` stops before any motion).
+
+    A drawer has two: the middle of the part of its box that is out of the carcass,
+    then as near its front wall as the object (and the fingers, when they open along
+    the pull) allow, with :data:`CLEARANCE`: the wrist and forearm above it then stay
+    farther from the fronts and handles of the drawers above (a low drawer, out only
+    15-20 cm, leaves the hand little room in front of them). A cell has one.
 
     Raises:
         UnknownNameError: no part ``link``.
@@ -153,28 +176,36 @@ def place_target(spec: CabinetSpec, link: str, q: float, T_world_object: np.ndar
     half = np.array(OBJECT_HALF_SIZE)
     size = np.asarray(part.interior_size, dtype=float)
     T = np.asarray(T_world_object, dtype=float)
-    if part.joint_type == "prismatic":
-        center = part.point_at(part.interior_center, q)
-        back, front_wall = center[0] - size[0] / 2, center[0] + size[0] / 2
-        start = max(back, spec.depth / 2 + FRONT_MARGIN)  # out of the carcass
-        out = front_wall - start
-        width = size[1]
-        along = out >= 2 * half[0] + 2 * CLEARANCE and width >= FINGER_SPAN + 2 * CLEARANCE
-        across = out >= FINGER_SPAN + 2 * CLEARANCE and width >= 2 * half[0] + 2 * CLEARANCE
-        if not (along or across):
-            raise ConfigError(
-                f"drawer {link} is out {out:.3f} m of the carcass ({width:.3f} m wide inside): "
-                f"the object ({2 * half[0]:.2f} x {2 * half[1]:.2f} m) needs "
-                f"{2 * half[0] + 2 * CLEARANCE:.2f} x {FINGER_SPAN + 2 * CLEARANCE:.2f} m"
-            )
-        local = np.array([0.5 * (start + front_wall), center[1], center[2] - size[2] / 2 + half[2]])
-        yaw = 0.0 if along else 0.5 * np.pi
-        grasp = "top"
-        lift = pitch = 0.0
-    else:
+    if part.joint_type != "prismatic":
         local, lift, pitch = _cell_place(part, q, half, link)
-        yaw = 0.0
-        grasp = "side"
+        return (_target(T, local, 0.0, pitch, "side", lift),)
+    center = part.point_at(part.interior_center, q)
+    back, front_wall = center[0] - size[0] / 2, center[0] + size[0] / 2
+    start = max(back, spec.depth / 2 + FRONT_MARGIN)  # out of the carcass
+    out = front_wall - start
+    width = size[1]
+    along = out >= 2 * half[0] + 2 * CLEARANCE and width >= FINGER_SPAN + 2 * CLEARANCE
+    across = out >= FINGER_SPAN + 2 * CLEARANCE and width >= 2 * half[0] + 2 * CLEARANCE
+    if not (along or across):
+        raise ConfigError(
+            f"drawer {link} is out {out:.3f} m of the carcass ({width:.3f} m wide inside): "
+            f"the object ({2 * half[0]:.2f} x {2 * half[1]:.2f} m) needs "
+            f"{2 * half[0] + 2 * CLEARANCE:.2f} x {FINGER_SPAN + 2 * CLEARANCE:.2f} m"
+        )
+    yaw = 0.0 if along else 0.5 * np.pi
+    middle = 0.5 * (start + front_wall)
+    near_wall = front_wall - CLEARANCE - (half[0] if along else FINGER_SPAN / 2)
+    z = center[2] - size[2] / 2 + half[2]
+    xs = [middle] + ([near_wall] if near_wall > middle + 1e-3 else [])
+    return tuple(_target(T, np.array([x, center[1], z]), yaw, 0.0, "top", 0.0) for x in xs)
+
+
+def _target(
+    T: np.ndarray, local: np.ndarray, yaw: float, pitch: float, grasp: str, lift: float
+) -> PlaceTarget:
+    """A :class:`PlaceTarget` from the object's centre ``local`` (3,) [m] in the cabinet
+    frame ``T`` (4, 4), turned by ``yaw`` about the vertical and pitched by ``pitch``
+    [rad]."""
     p = np.eye(4)
     # Pitch: the object's x (out of the front) tilted up, so the grasp's approach (its
     # -x, into the cabinet) tilts down.
