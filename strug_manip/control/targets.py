@@ -1,14 +1,15 @@
 """Where the object goes in a cabinet part, and with which grasp it gets there.
 
-:func:`place_target` turns "put the object into this part" into a pose ``p`` for
-:class:`~strug_manip.control.skills.Place` and the grasp
-:class:`~strug_manip.control.skills.Pick` must take for it:
+:func:`place_targets` turns "put the object into this part" into poses ``p`` for
+:class:`~strug_manip.control.skills.Place`, in the order to try them, and the grasp
+:class:`~strug_manip.control.skills.Pick` must take for them (:func:`place_target`:
+the first):
 
 - an open **drawer**: lowered from above (``top`` grasp) into the part of the drawer's
-  box that is out of the carcass, resting on its bottom. The box must be out far
-  enough for the object and the opened fingers (:data:`FINGER_SPAN`) with
-  :data:`CLEARANCE` all round; the object lies along the pull (fingers across the box)
-  where that fits, else across it.
+  box that is out of the carcass, resting on its bottom: in its middle, else as near
+  the drawer's front wall as it goes. The box must be out far enough for the object
+  and the opened fingers (:data:`FINGER_SPAN`) with :data:`CLEARANCE` all round; the
+  object lies along the pull (fingers across the box) where that fits, else across it.
 - a **cell** (behind an open door, or an open shelf): carried in level from the front
   (``side`` grasp), resting on the cell's floor :data:`INSERT` behind the front; it
   comes in from as high above its place as the cell's opening leaves room for (up to
