@@ -142,6 +142,8 @@ def true_parts(seed: int, T_world_cab: np.ndarray, fused: FusedCabinet | None) -
 
 #: A part at most this far from closed [m or rad] counts as closed.
 CLOSED = 0.02
+#: A part counts in a view with at least this many visible pixels (network resolution).
+MIN_VIEW_PIXELS = 40
 
 
 def _front_kind(part, q: float) -> str:
@@ -213,7 +215,7 @@ def evaluate_cabinet(
         pm = lv.part_map[::2, ::2]
         for k, jt in enumerate(lv.joint_type):
             mask = pm == k + 1
-            if jt == 0 or mask.sum() < 40:
+            if jt == 0 or mask.sum() < MIN_VIEW_PIXELS:
                 continue
             rec["view_parts"] += 1
             best, iou = None, 0.0

@@ -26,13 +26,11 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from eval_perception import type_unseen
+from eval_perception import MIN_VIEW_PIXELS, type_unseen
 
+from strug_manip.experiments.seeds import training_seeds
 from strug_manip.objects.generator import generate_cabinet
-from strug_manip.world.perception_data import TRAIN_SEED_START, render_episode
-
-#: Visible pixels (network resolution, stride 2) of a part that eval_perception counts.
-MIN_PIXELS = 40
+from strug_manip.world.perception_data import render_episode
 
 
 def count_cabinet(seed: int, views: int) -> Counter:
@@ -45,7 +43,7 @@ def count_cabinet(seed: int, views: int) -> Counter:
     for lv in render_episode(seed, views):
         pm = lv.part_map[::2, ::2]
         for k, part in enumerate(spec.parts):
-            if (pm == k + 1).sum() < MIN_PIXELS:
+            if (pm == k + 1).sum() < MIN_VIEW_PIXELS:
                 continue
             if part.kind == "panel":
                 c["panel"] += 1
@@ -54,23 +52,9 @@ def count_cabinet(seed: int, views: int) -> Counter:
     return c
 
 
-def seed_range(text: str) -> range:
-    """``START:STOP`` of training seeds (>= TRAIN_SEED_START)."""
-    try:
-        a, b = (int(x) for x in text.split(":"))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"--seeds must be START:STOP, got {text!r}") from None
-    if a < TRAIN_SEED_START or b <= a:
-        raise argparse.ArgumentTypeError(
-            f"--seeds must be training seeds START:STOP with {TRAIN_SEED_START} <= START < STOP, "
-            f"got {text!r}"
-        )
-    return range(a, b)
-
-
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--seeds", type=seed_range, required=True, help="START:STOP training seeds")
+    ap.add_argument("--seeds", type=training_seeds, required=True, help="START:STOP training seeds")
     ap.add_argument("--views", type=int, default=4)
     args = ap.parse_args(argv)
     from tqdm import tqdm

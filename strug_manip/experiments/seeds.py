@@ -29,3 +29,17 @@ def seed_range(text: str, below: int | None = None) -> range:
 def evaluation_seeds(text: str) -> range:
     """:func:`seed_range` below 10,000: the generated cabinets the evaluations use."""
     return seed_range(text, below=10_000)
+
+
+def training_seeds(text: str) -> range:
+    """:func:`seed_range` at or above
+    :data:`~strug_manip.world.perception_data.TRAIN_SEED_START`: the generated cabinets
+    of the training split."""
+    from strug_manip.world.perception_data import TRAIN_SEED_START
+
+    seeds = seed_range(text)
+    if seeds.start < TRAIN_SEED_START:
+        raise argparse.ArgumentTypeError(
+            f"training seeds start at {TRAIN_SEED_START:,}, got {text!r}"
+        )
+    return seeds
