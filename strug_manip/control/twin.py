@@ -13,9 +13,13 @@ the same :class:`~strug_manip.control.outcome.Outcome`:
    ``ik_infeasible``, as for the full robot; a placement gives each line's joint path,
    hence its duration under the one timing law (:mod:`.timing`), the same as the full
    robot's;
-2. **strength**: the hand's servos get the force and torque the Fetch's joints can
-   exert at the placement's grasp configuration (:func:`arm_strength`: their effort
-   limits through the hand's Jacobian, the grasp passing a moment as well as a force);
+2. **compliance and strength**: the hand's translation servos get the stiffness of
+   the Fetch's joint servos (base, torso, arm) seen at the hand at the placement's
+   grasp configuration, along its principal axes (:func:`arm_servo`: the compliance
+   ``J K^-1 J^T``; the arm gives way sideways three times more than along its reach,
+   which decides whether a wrong pull slides the fingers off a handle's end), and the
+   force and torque the Fetch's joints can exert there (their effort limits through
+   the hand's Jacobian, the grasp passing a moment as well as a force);
 3. **physics**: the hand starts at the pre-grasp (the free motion of the full robot,
    collision free by construction, is not simulated), then follows the lines (their
    Cartesian poses, on the same schedule as the arm's joint path; the retreat after a
@@ -47,6 +51,7 @@ from scipy.optimize import linprog
 
 from planners.errors import ConfigError
 from strug_manip.control import timing
+from strug_manip.control.base_servo import BaseServo, base_inertia
 from strug_manip.control.contacts import HAND_BODIES
 from strug_manip.control.context import ControlContext
 from strug_manip.control.execution import STOW_SEED, ends_holding, plan_stow, recovery_poses
@@ -74,8 +79,8 @@ from strug_manip.world.floating_gripper import (
     ARM_PARK,
     BALL,
     INTEGRAL_TIME,
+    SERVOS,
     SLIDES,
-    TRANSLATION_KP,
 )
 from strug_manip.world.scene import SceneConfig
 from strug_manip.world.sim import ManipulationWorld, WorldState
@@ -144,13 +149,19 @@ class PlanningTwin:
         self.params = params
         self.checked = bool(checked)
         self._planning_world: ManipulationWorld | None = None
+        self._base_servo: BaseServo | None = None
         m = self.world.model
         self._slide_adr = np.array([m.jnt_qposadr[m.joint(j).id] for j in SLIDES])
         self._slide_dof = np.array([m.jnt_dofadr[m.joint(j).id] for j in SLIDES])
         self._ball_adr = int(m.jnt_qposadr[m.joint(BALL).id])
         self._ball_dof = int(m.jnt_dofadr[m.joint(BALL).id])
-        self._slide_act = np.array([m.actuator(j).id for j in SLIDES])
-        self._slide_ctrl = np.array([self.world.ctrl_index(j) for j in SLIDES])
+        self._slide_act = np.array([m.actuator(j).id for j in SERVOS])
+        self._slide_ctrl = np.array([self.world.ctrl_index(j) for j in SERVOS])
+        self._servo_wraps = np.array([m.tendon_adr[m.tendon(t).id] for t in SERVOS])
+        # The mass each slide carries [kg] (compiled critically damped: kv^2 / 4 kp).
+        bias = m.actuator_biasprm[self._slide_act]
+        self._slide_mass = bias[:, 2] ** 2 / (4.0 * -bias[:, 1])
+        self._axes = np.eye(3)  # the servos' directions (columns), world frame
         self._rot_act = m.actuator(BALL).id
         self._rot_ctrl = self.world.ctrl_index(BALL)
         self._grip_ctrl = self.world.ctrl_index("gripper")
@@ -302,8 +313,8 @@ class PlanningTwin:
 
     def _command(self, origin: np.ndarray, velocity: np.ndarray, quat: np.ndarray) -> None:
         d = self.world.data
-        d.ctrl[self._slide_ctrl] = origin
-        d.ctrl[self._slide_ctrl + 1] = velocity
+        d.ctrl[self._slide_ctrl] = origin @ self._axes
+        d.ctrl[self._slide_ctrl + 1] = velocity @ self._axes
         d.ctrl[self._rot_ctrl : self._rot_ctrl + 4] = quat
 
     def _grip(self, closed: bool) -> None:
@@ -311,17 +322,24 @@ class PlanningTwin:
         self.world.data.ctrl[self._grip_ctrl] = self.grip_cmd
 
     def _strength(self, placement: Placement) -> None:
-        """The hand's force and torque limits: the arm's at the grasp (the end of the
-        first line, else the pre-grasp)."""
+        """The hand's servos: the arm's principal directions, stiffnesses and force
+        limits at the grasp (the end of the first line, else the pre-grasp), its torque
+        limit."""
         m = self.world.model
         base, q = placement.start_of(1 if placement.lines else 0)
         whole_body = any(bp is not None for bp in placement.base_paths)
-        force, torque = self.ctx.memo(  # type: ignore[misc]
-            ("twin strength", id(placement)),
-            lambda: arm_strength(self.ctx, base, q, whole_body),
+        axes, kp, force, torque = self.ctx.memo(  # type: ignore[misc]
+            ("twin servo", id(placement)),
+            lambda: arm_servo(self.ctx, base, q, whole_body),
         )
-        ki = TRANSLATION_KP / INTEGRAL_TIME
+        self._axes = axes
         for i, a in enumerate(self._slide_act):
+            w = self._servo_wraps[i]
+            m.wrap_prm[w : w + 3] = axes[:, i]  # the tendon's coefficients on the slides
+            mass = float(self._slide_mass @ axes[:, i] ** 2)
+            ki = kp[i] / INTEGRAL_TIME
+            m.actuator_gainprm[a, 0] = ki
+            m.actuator_biasprm[a, 1:3] = (-kp[i], -2.0 * np.sqrt(kp[i] * mass))
             m.actuator_forcerange[a] = [-force[i], force[i]]
             m.actuator_dynprm[a, 0] = force[i] / ki  # the integral alone: at most that
         m.actuator_forcerange[self._rot_act] = [0.0, torque]
@@ -344,9 +362,12 @@ class PlanningTwin:
 
         arms: list[np.ndarray] = []  # the arm links' poses (n, L, 7), parked if unused
         parked = self._parked_arm()
+        bases: list[np.ndarray] = []  # the base's command (n, 3)
+        base = placement.start_of(1 if placement.lines else 0)[0]
 
         def add(ps: np.ndarray, qs: np.ndarray, name: str, hold: bool, holding: bool,
                 arm: np.ndarray | None = None) -> None:  # fmt: skip
+            bases.append(np.repeat(np.asarray(base, float)[None], len(ps), axis=0))
             pos.append(ps)
             quat.append(qs)
             grips.append(np.full(len(ps), grip))
@@ -378,10 +399,12 @@ class PlanningTwin:
                 continue
             ps, qs, joints = _line_commands(ph, placement, k, here, self.vmax, dt)
             tol = p.tracking_tolerance if ph.tolerance is None else ph.tolerance
+            base = joints[-1, :3]
             # After the last release the arm moves freely, along its joint path: its
             # links may sweep the cabinet (e.g. back out of a drawer).
             arm = self._memo_arm(("line", id(placement), k), joints) if released else None
             add(ps, qs, ph.name, False, ph.holding, arm)
+            bases[-1] = joints[:, :3]
             here = (ps[-1], qs[-1])
             if not released:  # after the release the hand backs away in free space:
                 hold(p.settle_time, ph.name, ph.holding)  # the arm's settling is moot
@@ -395,8 +418,28 @@ class PlanningTwin:
         cat = np.concatenate
         # The cabinet settles while the full robot's stow goes on out of its way.
         coast = max(1, round(COAST_TIME / dt)) + rest if released else 0
-        return Program(plan, placement, cat(pos), cat(quat), cat(grips), cat(names), cat(held),
-                       cat(holds), cat(tols), start, coast, cat(arms))  # fmt: skip
+        pos_, quat_, planned = cat(pos), cat(quat), cat(bases)
+        actual = self._base_response(placement, planned)
+        drive_pos, drive_quat = _with_base(pos_, quat_, planned, actual)
+        return Program(plan, placement, pos_, quat_, cat(grips), cat(names), cat(held),
+                       cat(holds), cat(tols), start, coast, cat(arms), drive_pos,
+                       drive_quat)  # fmt: skip
+
+    def _base_response(self, placement: Placement, planned: np.ndarray) -> np.ndarray:
+        """Where the full robot's base is (n, 3) when commanded ``planned`` (n, 3) one
+        per step from the placement's grasp (:class:`~.base_servo.BaseServo`, the
+        robot's inertia at the grasp configuration), memoised per placement."""
+        if self._base_servo is None:
+            self._base_servo = BaseServo(self.ctx.ik.model, self.world.model.opt.timestep)
+        servo = self._base_servo
+
+        def respond() -> np.ndarray:
+            base, q = placement.start_of(1 if placement.lines else 0)
+            joints = {**dict(zip(BASE_JOINTS, base.tolist(), strict=True)),
+                      **dict(zip(ARM_TORSO_JOINTS, q.tolist(), strict=True))}  # fmt: skip
+            return servo.response(planned, base_inertia(self.ctx.ik.model, joints))
+
+        return self.ctx.memo(("twin base", id(placement), len(planned)), respond)  # type: ignore[return-value]
 
     def _parked_arm(self) -> np.ndarray:
         """The arm links' poses (L, 7) out of the scene (:data:`ARM_PARK`)."""
@@ -472,7 +515,7 @@ class PlanningTwin:
         """The twin's control vectors at every step of ``prog``, (nstep, nu + 7 nmocap):
         the actuators' controls, then the mocap bodies' positions and orientations
         (:data:`_CONTROL`)."""
-        return self._controls(prog.pos, prog.quat, prog.grip, prog.holds, prog.arm)
+        return self._controls(prog.drive_pos, prog.drive_quat, prog.grip, prog.holds, prog.arm)
 
     def recovery(self, prog: Program, state: np.ndarray) -> np.ndarray:
         """The controls (nstep, nu) of the full robot's recovery after a stop in
@@ -519,8 +562,8 @@ class PlanningTwin:
         vel[1:] = np.diff(origin, axis=0) / dt
         vel[holds] = 0.0
         ctrl = np.repeat(self.world.data.ctrl[None].copy(), len(origin), axis=0)
-        ctrl[:, self._slide_ctrl] = origin
-        ctrl[:, self._slide_ctrl + 1] = vel
+        ctrl[:, self._slide_ctrl] = origin @ self._axes
+        ctrl[:, self._slide_ctrl + 1] = vel @ self._axes
         ctrl[:, self._rot_ctrl : self._rot_ctrl + 4] = quat
         ctrl[:, self._grip_ctrl] = grip
         d, nm = self.world.data, self.world.model.nmocap
@@ -690,6 +733,25 @@ class PlanningTwin:
         )
 
 
+def _with_base(
+    pos: np.ndarray, quat: np.ndarray, planned: np.ndarray, actual: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """TCP poses ``pos`` (n, 3), ``quat`` (n, 4) planned with the base at ``planned``
+    (n, 3: x, y, yaw) carried to the base at ``actual`` (n, 3): the same pose in the
+    base's frame."""
+    dyaw = actual[:, 2] - planned[:, 2]
+    c, s = np.cos(dyaw), np.sin(dyaw)
+    rel = pos[:, :2] - planned[:, :2]
+    out = pos.copy()
+    out[:, 0] = c * rel[:, 0] - s * rel[:, 1] + actual[:, 0]
+    out[:, 1] = s * rel[:, 0] + c * rel[:, 1] + actual[:, 1]
+    # (cos h, 0, 0, sin h) * (w, x, y, z): a turn by 2h about the world's z first.
+    ch, sh = np.cos(dyaw / 2)[:, None], np.sin(dyaw / 2)[:, None]
+    w, x, y, z = quat.T[:, :, None]
+    q = np.hstack([ch * w - sh * z, ch * x - sh * y, ch * y + sh * x, ch * z + sh * w])
+    return out, q
+
+
 def _quats(R: np.ndarray) -> np.ndarray:
     """Unit quaternions (w, x, y, z), (n, 4), of rotation matrices (n, 3, 3)."""
     out = np.empty((len(R), 4))
@@ -717,35 +779,48 @@ def _x_axes(q: np.ndarray) -> np.ndarray:
     return np.column_stack([1 - 2 * (y * y + z * z), 2 * (x * y + z * w), 2 * (x * z - y * w)])
 
 
-def arm_strength(
+def arm_servo(
     ctx: ControlContext, base: np.ndarray, q: np.ndarray, whole_body: bool
-) -> tuple[np.ndarray, float]:
-    """What the Fetch's hand can exert at base + torso + arm ``q``: the force along
-    each world axis [N] (3,) and a torque [N m], clipped to :data:`FORCE_BOUNDS` and
-    :data:`TORQUE_BOUNDS`, over the torso and arm joints (with ``whole_body``, the
-    base's too), ``tau`` their effort limits and ``J`` the hand's Jacobian there:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    """The Fetch's hand at base + torso + arm ``q`` as the twin's servos see it:
 
-    - the torque: ``min_j tau_j / |J_rot,j|`` (the weakest joint, about any axis);
-    - the force along world axis ``i``: the largest ``F`` with joint torques
-      ``J_pos,i,j F + J_rot,j . M`` within every ``tau_j`` for some moment ``M`` at the
-      hand no larger than that torque about each axis (a linear programme): the fingers
-      on a handle pass a moment as well as a force, so the joints that would saturate
-      under a pure force (the shoulder's pan under a sideways pull) share the load with
-      the others. A pure force's bound (``min_j tau_j / |J_pos,i,j|``) is the fallback
-      if the programme fails.
+    - ``axes`` (3, 3), columns: the principal directions of the hand's translational
+      compliance ``C = Jp K^-1 Jp^T`` (``K`` the proportional gains of the base's, the
+      torso's and the arm's servos, ``Jp`` the TCP's position Jacobian over those
+      joints: the base always gives way, its servos hold it where it stands);
+    - ``kp`` (3,): the stiffness along each [N/m], ``1 / eigenvalue of C``;
+    - ``force`` (3,): the force the joints can exert along each [N] and ``torque`` [N m],
+      clipped to :data:`FORCE_BOUNDS` and :data:`TORQUE_BOUNDS`, over the torso and arm
+      joints (with ``whole_body``, the base's too), ``tau`` their effort limits:
+
+      - the torque: ``min_j tau_j / |J_rot,j|`` (the weakest joint, about any axis);
+      - the force along direction ``a``: the largest ``F`` with joint torques
+        ``(a . J_pos,j) F + J_rot,j . M`` within every ``tau_j`` for some moment ``M``
+        at the hand no larger than that torque about each axis (a linear programme):
+        the fingers on a handle pass a moment as well as a force, so the joints that
+        would saturate under a pure force (the shoulder's pan under a sideways pull)
+        share the load with the others. A pure force's bound is the fallback if the
+        programme fails.
     """
     ik = ctx.ik
     m = ik.model
-    joints = (*BASE_JOINTS, *ARM_TORSO_JOINTS) if whole_body else ARM_TORSO_JOINTS
     J = ik.jacobian(
         {**dict(zip(BASE_JOINTS, base.tolist(), strict=True)),
          **dict(zip(ARM_TORSO_JOINTS, q.tolist(), strict=True))}
     )  # fmt: skip
+    servoed = (*BASE_JOINTS, *ARM_TORSO_JOINTS)
+    cols = [int(m.jnt_dofadr[m.joint(j).id]) for j in servoed]
+    gains = np.array([-float(m.actuator_biasprm[m.actuator(ACTUATORS[j]).id, 1]) for j in servoed])
+    jp = J[:3, cols]
+    eig, axes = np.linalg.eigh((jp / gains) @ jp.T)
+    kp = 1.0 / np.maximum(eig, 1e-9)
+
+    joints = servoed if whole_body else ARM_TORSO_JOINTS
     cols = [int(m.jnt_dofadr[m.joint(j).id]) for j in joints]
     tau = np.array(
         [float(np.max(np.abs(m.actuator_forcerange[m.actuator(ACTUATORS[j]).id]))) for j in joints]
     )
-    jacp, jacr = J[:3, cols], J[3:, cols]
+    jacp, jacr = axes.T @ J[:3, cols], J[3:, cols]
 
     def cap(Jc: np.ndarray) -> np.ndarray:
         a = np.abs(Jc)
@@ -762,7 +837,7 @@ def arm_strength(
         )  # fmt: skip
         if res.success:
             force[i] = max(force[i], float(res.x[0]))
-    return np.clip(force, *FORCE_BOUNDS), torque
+    return axes, kp, np.clip(force, *FORCE_BOUNDS), torque
 
 
 def _collide(m: mujoco.MjModel, g: int) -> tuple[int, int]:
@@ -801,6 +876,11 @@ class Program:
             (the full robot backs away and stows; the cabinet settles), or 0.
         arm: the arm links' poses at every step (position, quaternion), (nstep, L, 7):
             along the full robot's joint path after the last release, else parked.
+        drive_pos, drive_quat: what the hand's servos are commanded, (nstep, 3) and
+            (nstep, 4): ``pos`` and ``quat`` moved with the full robot's base where it
+            lags behind or overshoots its command (:class:`~.base_servo.BaseServo`);
+            the monitors compare the hand with ``pos``, as the full robot's compare
+            it with its command.
     """
 
     plan: SkillPlan
@@ -815,6 +895,8 @@ class Program:
     start: np.ndarray
     coast: int
     arm: np.ndarray
+    drive_pos: np.ndarray
+    drive_quat: np.ndarray
 
 
 @dataclass(frozen=True, eq=False)

@@ -5,10 +5,15 @@ as ``models/fetch/fetch.xml`` has it (palm mesh, finger pads, finger joints, the
 coupling, tendon and servo, the ``gripper`` TCP site), carried by three slides along
 the world axes and a ball joint at the palm, and drives it like an arm would:
 
-- **translation**: one position servo with integral action per world axis (MuJoCo's
-  PID actuators, :data:`TRANSLATION_KP`, critically damped, integral time
-  :data:`INTEGRAL_TIME`) whose force limit the twin sets per run to what the Fetch's
-  joints can push along that axis at the grasp (:mod:`strug_manip.control.twin`);
+- **translation**: three position servos with integral action (MuJoCo's PID
+  actuators, critically damped, integral time :data:`INTEGRAL_TIME`), each on a fixed
+  tendon of the three slides: a direction of the hand's motion. The twin sets per run
+  the directions, gains and force limits (:mod:`strug_manip.control.twin`): the
+  principal axes and stiffnesses of the Fetch's arm and base servos seen at the hand at
+  the grasp, and what the Fetch's joints can push along each (an arm is three times
+  softer sideways, where its base yaws and its shoulder pans, than along its reach, so
+  one gain for every world axis cannot be right); until then the directions are the
+  world axes and the gain :data:`TRANSLATION_KP`;
 - **rotation**: a geodesic orientation servo on the ball joint (MuJoCo's SO3 actuator,
   quaternion target, :data:`ROTATION_KP`), its torque norm limited likewise;
 - every body is gravity compensated, as the Fetch's arm is;
@@ -22,9 +27,10 @@ A mocap body ``robot_base`` (no geometry) stands where the full robot's base is
 believed to be: its pose is part of the simulation state, so a snapshot of the twin
 carries it (the base placement of the next skill starts from there).
 
-Joint and actuator names: ``twin_x``, ``twin_y``, ``twin_z`` (slides), ``twin_rot``
-(ball); the fingers keep the Fetch's names (``r_gripper_finger_joint``, ...,
-actuator and tendon ``gripper``), so code reading the fingers works on both.
+Joint names: ``twin_x``, ``twin_y``, ``twin_z`` (slides), ``twin_rot`` (ball); tendon
+and actuator names :data:`SERVOS` (translation) and ``twin_rot`` (rotation); the
+fingers keep the Fetch's names (``r_gripper_finger_joint``, ..., actuator and tendon
+``gripper``), so code reading the fingers works on both.
 """
 
 from __future__ import annotations
@@ -39,8 +45,11 @@ from strug_manip.robot.fetch import FETCH_XML
 #: Slide joints (world x, y, z) and the ball joint of the floating gripper.
 SLIDES: tuple[str, str, str] = ("twin_x", "twin_y", "twin_z")
 BALL = "twin_rot"
-#: Translation servo gain [N/m]: the Fetch's arm servos (kp 600-3000 N m/rad on levers
-#: of 0.3-0.9 m) seen at the hand.
+#: The translation servos: fixed tendons of the slides (a direction each, the world
+#: axes until the twin sets them) and the PID actuators on them.
+SERVOS: tuple[str, str, str] = ("twin_u", "twin_v", "twin_w")
+#: Translation servo gain until the twin sets the arm's [N/m]: the Fetch's arm servos
+#: (kp 600-3000 N m/rad on levers of 0.3-0.9 m) seen at the hand.
 TRANSLATION_KP = 3000.0
 #: Orientation servo gain [N m/rad]: the wrist servos' (kp 200-600 N m/rad).
 ROTATION_KP = 300.0
@@ -109,8 +118,11 @@ def add_floating_gripper(spec: mujoco.MjSpec) -> None:
         if mesh.name not in ("gripper_link", *ARM_LINKS):  # and the arm's
             spec.delete(mesh)
     _add_arm(spec, src)
-    for name in SLIDES:
-        act = spec.add_actuator(name=name, target=name, trntype=mujoco.mjtTrn.mjTRN_JOINT)
+    for name, axis in zip(SERVOS, np.eye(3), strict=True):
+        tendon = spec.add_tendon(name=name)
+        for slide, coef in zip(SLIDES, axis, strict=True):  # every slide: the twin turns it
+            tendon.wrap_joint(slide, float(coef))
+        act = spec.add_actuator(name=name, target=name, trntype=mujoco.mjtTrn.mjTRN_TENDON)
         ki = TRANSLATION_KP / INTEGRAL_TIME
         act.set_to_pid(kp=TRANSLATION_KP, dampratio=1.0, ki=ki, imax=DEFAULT_FORCE / ki)
         act.forcelimited = True

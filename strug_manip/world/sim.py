@@ -216,14 +216,33 @@ class ManipulationWorld:
         m, d = self.model, self.data
         joint_trn = int(mujoco.mjtTrn.mjTRN_JOINT)
         ball = int(mujoco.mjtJoint.mjJNT_BALL)
+        tendon_trn = int(mujoco.mjtTrn.mjTRN_TENDON)
         for a in range(m.nactuator):
+            c = m.actuator_ctrladr[a]
+            servo = m.actuator_biastype[a] != 0 and m.actuator(a).name != "gripper"
+            if int(m.actuator_trntype[a]) == tendon_trn and servo:  # (the fingers: below)
+                length = self._fixed_tendon_length(int(m.actuator_trnid[a, 0]))
+                if length is not None:  # a servo on a combination of joints (the twin's)
+                    d.ctrl[c : c + m.actuator_ctrlnum[a]] = 0.0
+                    d.ctrl[c] = length
+                continue
             if int(m.actuator_trntype[a]) != joint_trn or m.actuator_biastype[a] == 0:
                 continue  # not a servo on a joint (e.g. the finger tendon: set below)
-            jid, c = m.actuator_trnid[a, 0], m.actuator_ctrladr[a]
+            jid = m.actuator_trnid[a, 0]
             q = m.jnt_qposadr[jid]
             n = 4 if int(m.jnt_type[jid]) == ball else 1
             d.ctrl[c : c + m.actuator_ctrlnum[a]] = 0.0
             d.ctrl[c : c + n] = d.qpos[q : q + n]
+
+    def _fixed_tendon_length(self, tendon: int) -> float | None:
+        """The length of a fixed tendon (a linear combination of joint positions) from
+        ``qpos``; None for a spatial one."""
+        m, d = self.model, self.data
+        adr, num = m.tendon_adr[tendon], m.tendon_num[tendon]
+        if np.any(m.wrap_type[adr : adr + num] != int(mujoco.mjtWrap.mjWRAP_JOINT)):
+            return None
+        q = d.qpos[m.jnt_qposadr[m.wrap_objid[adr : adr + num]]]
+        return float(m.wrap_prm[adr : adr + num] @ q)
 
     def ctrl_index(self, actuator: str) -> int:
         """Index in ``data.ctrl`` of ``actuator``'s first control (MuJoCo 4 actuators may
