@@ -16,8 +16,9 @@ the same :class:`~strug_manip.control.outcome.Outcome`:
 2. **compliance and strength**: the hand's translation servos get the stiffness of
    the Fetch's joint servos (base, torso, arm) seen at the hand at the placement's
    grasp configuration, along its principal axes (:func:`arm_servo`: the compliance
-   ``J K^-1 J^T``; the arm gives way sideways three times more than along its reach,
-   which decides whether a wrong pull slides the fingers off a handle's end), and the
+   ``J K^-1 J^T``; a reaching arm gives way horizontally far more than
+   vertically, which decides whether a wrong pull slides the fingers off a handle's
+   end), and the
    force and torque the Fetch's joints can exert there (their effort limits through
    the hand's Jacobian, the grasp passing a moment as well as a force);
 3. **physics**: the hand starts at the pre-grasp (the free motion of the full robot,
@@ -32,7 +33,10 @@ the same :class:`~strug_manip.control.outcome.Outcome`:
    execution.plan_stow`) until they are clear of the cabinet, leave the scene, and the
    cabinet and the object settle for :data:`COAST_TIME`, and on while the cabinet still
    moves (:data:`REST_SPEED`), up to the rest of the stow's duration (a drawer of a
-   dragged, tilted cabinet creeps on while the full robot stows).
+   dragged, tilted cabinet creeps on while the full robot stows). Where a line moves
+   the base, the hand's command moves with the full robot's base as it lags and
+   overshoots its command (:class:`~.base_servo.BaseServo`); the monitors compare the
+   hand with the plan, as the full robot's compare it with its command.
 
 A twin's state (:meth:`PlanningTwin.snapshot`) includes where the full robot's base is
 believed to stand (the ``robot_base`` mocap body), from which the next placement starts.

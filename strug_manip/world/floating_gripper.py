@@ -10,9 +10,10 @@ the world axes and a ball joint at the palm, and drives it like an arm would:
   tendon of the three slides: a direction of the hand's motion. The twin sets per run
   the directions, gains and force limits (:mod:`strug_manip.control.twin`): the
   principal axes and stiffnesses of the Fetch's arm and base servos seen at the hand at
-  the grasp, and what the Fetch's joints can push along each (an arm is three times
-  softer sideways, where its base yaws and its shoulder pans, than along its reach, so
-  one gain for every world axis cannot be right); until then the directions are the
+  the grasp, and what the Fetch's joints can push along each (a reaching Fetch gives way
+  horizontally, where its base yaws and its shoulder pans, far more than
+  vertically, where its torso and shoulder lift hold it: one gain for every world axis
+  cannot be right); until then the directions are the
   world axes and the gain :data:`TRANSLATION_KP`;
 - **rotation**: a geodesic orientation servo on the ball joint (MuJoCo's SO3 actuator,
   quaternion target, :data:`ROTATION_KP`), its torque norm limited likewise;
