@@ -282,7 +282,7 @@ class PlanningTwin:
         plan = prog.plan
         touches = plan.carrying is not None or any("object" in ln.touch for ln in plan.lines)
         self._object_idle(not touches)
-        self._strength(prog.placement)
+        self._servos(prog.placement)
         self._set_hand(prog.start)
         m, d = self.world.model, self.world.data
         if plan.carrying is not None:
@@ -325,7 +325,7 @@ class PlanningTwin:
         self.grip_cmd = GRIPPER_SQUEEZE if closed else GRIPPER_OPEN
         self.world.data.ctrl[self._grip_ctrl] = self.grip_cmd
 
-    def _strength(self, placement: Placement) -> None:
+    def _servos(self, placement: Placement) -> None:
         """The hand's servos: the arm's principal directions, stiffnesses and force
         limits at the grasp (the end of the first line, else the pre-grasp), its torque
         limit."""

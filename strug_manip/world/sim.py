@@ -111,6 +111,10 @@ def depth_to_points(
     return p_cam @ T_world_camera[:3, :3].T + T_world_camera[:3, 3], keep
 
 
+#: The fingers' servo (on their tendon): commanded open or squeezing, never "held".
+FINGER_SERVO = "gripper"
+
+
 class ManipulationWorld:
     """The scene, with reset, stepping, state read-out and rendering.
 
@@ -219,7 +223,7 @@ class ManipulationWorld:
         tendon_trn = int(mujoco.mjtTrn.mjTRN_TENDON)
         for a in range(m.nactuator):
             c = m.actuator_ctrladr[a]
-            servo = m.actuator_biastype[a] != 0 and m.actuator(a).name != "gripper"
+            servo = m.actuator_biastype[a] != 0 and m.actuator(a).name != FINGER_SERVO
             if int(m.actuator_trntype[a]) == tendon_trn and servo:  # (the fingers: below)
                 length = self._fixed_tendon_length(int(m.actuator_trnid[a, 0]))
                 if length is not None:  # a servo on a combination of joints (the twin's)
@@ -260,7 +264,7 @@ class ManipulationWorld:
 
     def _fill_gripper_ctrl(self) -> None:
         m = self.model
-        aid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, "gripper")
+        aid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, FINGER_SERVO)
         if aid >= 0:
             self.data.ctrl[m.actuator_ctrladr[aid]] = GRIPPER_OPEN
 
