@@ -4,7 +4,8 @@ chains and the planning twin.
 Usage::
 
     python tools/eval_skills.py --seeds 1000:1030 [--json] [--out DIR] [--workers 2]
-                                [--plot docs/drag.png]
+                                [--plot docs/drag.png] [--twin-steps 0.005,0.003]
+                                [--only twin]
 
 For every generator seed in ``A..B-1`` two scenes are built (a drawers-only and a
 doors-only cabinet, as the OpenDrawer and OpenDoor tasks draw them), and for every
@@ -36,7 +37,14 @@ movable part with a handle (a flat front cannot be grasped):
   unless both dragged the cabinet (the episode ends there; ``agreement_strict`` asks
   the motion of those too); the speed-up is the ratio of the full robot's to the
   twin's total wall time (the twin's placement cached, as in a search; the cold
-  first runs are reported beside).
+  first runs are reported beside). ``--twin-steps`` runs twins of several physics
+  steps on the same full-robot runs (the first is the one reported as ``twin``; each
+  under ``twin_steps``): what a smaller step buys in agreement and costs in speed.
+
+``--only twin`` runs just what the twin is compared on (every true-model opening,
+both wrong-model pulls and the PullH probe of each handled part, on the full robot
+and on the twins) and reports only ``twin`` and ``twin_steps``: about a third of the
+full evaluation's time (the chains, the sequences and the other probes are left out).
 
 Results are appended per seed to ``OUT/results.jsonl`` as they finish; a rerun with the
 same ``--out`` skips the seeds already there. ``--json`` prints one JSON object (keys
@@ -46,6 +54,7 @@ in the docstring of :func:`summary`).
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import multiprocessing as mp
 import os
@@ -73,6 +82,7 @@ from strug_manip.control import (
     place_targets,
 )
 from strug_manip.control.params import DEFAULT_PARAMS
+from strug_manip.control.twin import TIMESTEP as TWIN_STEP
 from strug_manip.domains.manipulation.rules import dragged, inside, open_enough
 from strug_manip.experiments.seeds import seed_range
 from strug_manip.objects.hypotheses import BelievedJoint, believed_spec, cell_joints, model_of
@@ -88,6 +98,9 @@ CONFUSIONS: dict[str, tuple[str, str]] = {
 }
 #: Agreement tolerances of the twin: part motion [m] for prismatic, [rad] for revolute.
 AGREE_M, AGREE_RAD = 0.01, 0.05
+#: The key of the default twin's rows under ``twin_steps`` (records made before there
+#: were several steps hold that twin's alone).
+TWIN_KEY = f"{TWIN_STEP:g}"
 
 
 def category(model: str) -> str:
@@ -176,8 +189,18 @@ def compare(full: Outcome, twin: Outcome, cold: float, joint: str, unit: str) ->
     }
 
 
-def evaluate_part(world, twin, spec, part, ctx) -> dict:
-    """Every measurement of one part (see the module docstring)."""
+def twin_compare(twins: dict, full: Outcome, skill, joint: str, unit: str, plan_world=None):
+    """``skill`` again on every twin (by physics step): {step: :func:`compare` row}."""
+    return {
+        step: compare(full, *simulate_twice(tw, skill, plan_world), joint, unit)
+        for step, tw in twins.items()
+    }
+
+
+def evaluate_part(world, twins: dict, spec, part, ctx, only_twin: bool = False) -> dict:
+    """Every measurement of one part (see the module docstring); ``twins``: planning
+    twins of the true cabinet by physics step (the first reported as ``twin``);
+    ``only_twin``: just the runs the twins are compared on."""
     T = world.scene.T_world_cabinet
     model = model_of(part)
     joint_name = world.scene.cabinet_prefix + part.joint
@@ -209,9 +232,8 @@ def evaluate_part(world, twin, spec, part, ctx) -> dict:
         "sim": out.sim_time,
         "displacement": out.cabinet_displacement,
     }
-    twins = []
-    twins.append(compare(out, *simulate_twice(twin, skill), joint_name, unit))
-    if ok and wide:
+    rows = [twin_compare(twins, out, skill, joint_name, unit)]
+    if ok and wide and not only_twin:
         tgts = place_targets(spec, part.link, q, T_now)
         pick = Pick("object", tgts[0].grasp).run(world, ctx=ctx)
         chain = {"pick": str(pick.status), "place": None, "ok": False}
@@ -255,10 +277,11 @@ def evaluate_part(world, twin, spec, part, ctx) -> dict:
                 "false_success": bool(said and not truth),
             }
         )
-        twins.append(compare(out, *simulate_twice(twin, skill, pw), joint_name, unit))
+        rows.append(twin_compare(twins, out, skill, joint_name, unit, pw))
         pw.close()
     rec["wrong"] = wrong
-    rec["sequence"] = wrong_sequence(world, spec, part, model, ctx)
+    if not only_twin:
+        rec["sequence"] = wrong_sequence(world, spec, part, model, ctx)
     # --- probes --------------------------------------------------------------------
     probes = {}
     grasps = handle_grasps(part, 0.0, T)
@@ -269,6 +292,8 @@ def evaluate_part(world, twin, spec, part, ctx) -> dict:
         ("pull_out", PullH),
         ("pull_side", lambda g: PullH(g, True)),
     ):
+        if only_twin and name != "pull_out":
+            continue
         o = None
         for g in grasps:
             world.reset()
@@ -281,9 +306,12 @@ def evaluate_part(world, twin, spec, part, ctx) -> dict:
             "displacement": o.cabinet_displacement,
         }
         if name == "pull_out":
-            twins.append(compare(o, *simulate_twice(twin, make(g)), joint_name, unit))
-    rec["probes"] = probes
-    rec["twin"] = twins
+            rows.append(twin_compare(twins, o, make(g), joint_name, unit))
+    if not only_twin:
+        rec["probes"] = probes
+    first = next(iter(twins))
+    rec["twin"] = [r[first] for r in rows]
+    rec["twin_steps"] = {step: [r[step] for r in rows] for step in twins}
     return rec
 
 
@@ -319,21 +347,26 @@ def wrong_sequence(world, spec, part, model: str, ctx) -> list[float]:
     return out
 
 
-def evaluate_seed(seed: int) -> dict:
-    """Every part of the drawers-only and the doors-only cabinet of ``seed``."""
+def evaluate_seed(
+    seed: int, twin_steps: tuple[float, ...] = (TWIN_STEP,), only_twin: bool = False
+) -> dict:
+    """Every part of the drawers-only and the doors-only cabinet of ``seed``, with
+    planning twins of the physics steps ``twin_steps`` [s]."""
     ctx = ControlContext()
     parts = []
     t0 = time.perf_counter()
     for kind in ("drawer", "door"):
         world = ManipulationWorld(SceneConfig(cabinet_seed=seed, cabinet_kinds=(kind,)))
         spec = world.scene.cabinet_spec
-        twin = PlanningTwin(spec, world.config, ctx)
+        twins = {f"{dt:g}": PlanningTwin(spec, world.config, ctx, timestep=dt) for dt in twin_steps}
         for part in spec.movable_parts:
             if part.handle == "none":
                 continue
-            parts.append({"scene": kind, **evaluate_part(world, twin, spec, part, ctx)})
+            rec = evaluate_part(world, twins, spec, part, ctx, only_twin)
+            parts.append({"scene": kind, **rec})
         world.close()
-    return {"seed": seed, "parts": parts, "seconds": time.perf_counter() - t0}
+    rec = {"seed": seed, "parts": parts, "seconds": time.perf_counter() - t0}
+    return {**rec, "only": "twin"} if only_twin else rec
 
 
 def rate(flags: list[bool]) -> dict:
@@ -359,11 +392,20 @@ def summary(records: list[dict]) -> dict:
       speed-up is the full robot's total wall time over the twin's with its placement
       cached (a search simulates a skill on a particle many times; ``speedup_cold``:
       over the first runs, which search the placement);
+    - ``twin_steps``: the same per twin physics step (``"0.005"``, ...);
     - ``seconds``: median wall time of the openings, per skill (``median_per_skill_s``)
       and the total [s].
+
+    Records of ``--only twin`` give ``twin`` and ``twin_steps`` alone.
     """
     parts = [p for r in records for p in r["parts"]]
-    out: dict = {}
+    out: dict = {"twin": twin_figures([t for p in parts for t in p["twin"]])}
+    steps = sorted({k for p in parts for k in p.get("twin_steps", {})}, key=float, reverse=True)
+    out["twin_steps"] = {
+        k: twin_figures([t for p in parts for t in p["twin_steps"].get(k, [])]) for k in steps
+    }
+    if any(r.get("only") == "twin" for r in records):
+        return out
     for cat in ("open_drawer", "open_door", "open_flap"):
         ps = [p for p in parts if p["category"] == cat]
         out[cat] = {
@@ -413,19 +455,6 @@ def summary(records: list[dict]) -> dict:
     out["probes"] = probes
     for name, scene in (("chain_drawer", "drawer"), ("chain_door", "door")):
         out[name] = rate([p["chain"]["ok"] for p in parts if p["scene"] == scene and "chain" in p])
-    tw = [t for p in parts for t in p["twin"]]
-    full_wall = sum(t["full_wall"] for t in tw)
-    twin_wall = sum(t["twin_wall"] for t in tw)
-    cold_wall = sum(t.get("twin_cold_wall", t["twin_wall"]) for t in tw)
-    out["twin"] = {
-        "agreement": rate([t["agree"] for t in tw]),
-        "agreement_strict": rate([t.get("agree_strict", t["agree"]) for t in tw]),
-        "speedup": full_wall / twin_wall if twin_wall > 0 else None,
-        "speedup_cold": full_wall / cold_wall if cold_wall > 0 else None,
-        "median_full_s": statistics.median([t["full_wall"] for t in tw]) if tw else None,
-        "median_twin_s": statistics.median([t["twin_wall"] for t in tw]) if tw else None,
-        "disagreements": dict(Counter(f"{t['full']} vs {t['twin']}" for t in tw if not t["agree"])),
-    }
     walls = [p["open"]["wall"] for p in parts]
     per: dict[str, list[float]] = {}
     for p in parts:
@@ -442,6 +471,29 @@ def summary(records: list[dict]) -> dict:
         "total_s": sum(r["seconds"] for r in records),
     }
     return out
+
+
+def twin_figures(tw: list[dict]) -> dict:
+    """The twin's agreement and speed-up over its comparison rows (see :func:`summary`)."""
+    full_wall = sum(t["full_wall"] for t in tw)
+    twin_wall = sum(t["twin_wall"] for t in tw)
+    cold_wall = sum(t.get("twin_cold_wall", t["twin_wall"]) for t in tw)
+    return {
+        "agreement": rate([t["agree"] for t in tw]),
+        "agreement_strict": rate([t.get("agree_strict", t["agree"]) for t in tw]),
+        "speedup": full_wall / twin_wall if twin_wall > 0 else None,
+        "speedup_cold": full_wall / cold_wall if cold_wall > 0 else None,
+        "median_full_s": statistics.median([t["full_wall"] for t in tw]) if tw else None,
+        "median_twin_s": statistics.median([t["twin_wall"] for t in tw]) if tw else None,
+        "disagreements": dict(Counter(f"{t['full']} vs {t['twin']}" for t in tw if not t["agree"])),
+    }
+
+
+def usable(rec: dict, steps: list[str], only_twin: bool) -> bool:
+    """Whether a stored record answers this run: full if a full run is asked, with
+    the twins of every step asked (else the seed is evaluated again)."""
+    have = set(rec["parts"][0].get("twin_steps", {TWIN_KEY: None})) if rec["parts"] else set()
+    return (only_twin or rec.get("only") is None) and (not rec["parts"] or set(steps) <= have)
 
 
 def load(path: Path) -> dict[int, dict]:
@@ -464,13 +516,24 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", type=Path, default=None, help="results folder (resumable)")
     ap.add_argument("--workers", type=int, default=1, help="processes (default 1)")
     ap.add_argument("--plot", type=Path, default=None, help="write the drag distributions (PNG)")
+    ap.add_argument(
+        "--twin-steps",
+        type=twin_steps,
+        default=(TWIN_STEP,),
+        help=f"twin physics steps [s], e.g. 0.005,0.003 (default {TWIN_STEP:g})",
+    )
+    ap.add_argument("--only", choices=("twin",), default=None,
+                    help="twin: only the runs the twin is compared on")  # fmt: skip
     args = ap.parse_args(argv)
     a, b = args.seeds.start, args.seeds.stop
-    out_dir = args.out or Path(f"runs/eval_skills_{a}_{b}")
+    only_twin = args.only == "twin"
+    out_dir = args.out or Path(f"runs/eval_skills_{'twin_' if only_twin else ''}{a}_{b}")
     out_dir.mkdir(parents=True, exist_ok=True)
     path = out_dir / "results.jsonl"
-    done = load(path)
+    steps = [f"{dt:g}" for dt in args.twin_steps]
+    done = {s: r for s, r in load(path).items() if usable(r, steps, only_twin)}
     todo = [s for s in range(a, b) if s not in done]
+    job = functools.partial(evaluate_seed, twin_steps=args.twin_steps, only_twin=only_twin)
     from tqdm import tqdm
 
     bar = tqdm(total=len(todo), unit="cabinet", desc="eval_skills", file=sys.stderr)
@@ -485,22 +548,35 @@ def main(argv: list[str] | None = None) -> int:
 
         if args.workers > 1 and len(todo) > 1:
             with mp.get_context("spawn").Pool(args.workers) as pool:
-                for rec in pool.imap_unordered(evaluate_seed, todo):
+                for rec in pool.imap_unordered(job, todo):
                     keep(rec)
         else:
             for seed in todo:
-                keep(evaluate_seed(seed))
+                keep(job(seed))
     bar.close()
     records = [done[s] for s in range(a, b) if s in done]
     figures = summary(records)
     (out_dir / "summary.json").write_text(json.dumps(figures, indent=1) + "\n")
-    if args.plot is not None:
+    if args.plot is not None and not only_twin:
         plot_drag(records, args.plot, f"{a}:{b}")
     if args.json:
         print(json.dumps(figures))
     else:
         print(report(figures, f"{a}:{b}"))
     return 0
+
+
+def twin_steps(text: str) -> tuple[float, ...]:
+    """``--twin-steps``: comma-separated physics steps [s], each in (0, 0.01]."""
+    try:
+        steps = tuple(float(x) for x in text.split(","))
+    except ValueError:
+        steps = ()
+    if not steps or any(not (0.0 < dt <= 0.01) for dt in steps):
+        raise argparse.ArgumentTypeError(
+            f"expected comma-separated steps in (0, 0.01] s such as 0.005,0.003, got {text!r}"
+        )
+    return steps
 
 
 def plot_drag(records: list[dict], path: Path, seeds: str) -> None:
@@ -538,6 +614,8 @@ def report(fig: dict, seeds: str) -> str:
     """The figures as lines a person reads (the ``--json`` object has them all)."""
     pct = lambda r: f"{r['ok']}/{r['n']} ({100 * r['ok'] / max(r['n'], 1):.0f}%)"  # noqa: E731
     lines = [f"eval_skills on generated cabinets {seeds}"]
+    if "open_drawer" not in fig:  # --only twin
+        return "\n".join(lines + twin_lines(fig, pct))
     for cat in ("open_drawer", "open_door", "open_flap"):
         r = fig[cat]
         causes = ", ".join(f"{k} {v}" for k, v in sorted(r["causes"].items()) if k != "ok")
@@ -555,15 +633,28 @@ def report(fig: dict, seeds: str) -> str:
                           for k, v in probes.items())  # fmt: skip
         lines.append(f"  probes {kind:9s} moved: {cells}")
     lines.append(f"  chains       drawer {pct(fig['chain_drawer'])}, door {pct(fig['chain_door'])}")
-    t = fig["twin"]
-    lines.append(f"  twin         agreement {pct(t['agreement'])} (strict "
-                 f"{pct(t['agreement_strict'])}), speed-up {t['speedup'] or 0:.1f}x "
-                 f"(cold {t['speedup_cold'] or 0:.1f}x)")  # fmt: skip
-    lines.append(f"               disagreements (full vs twin) {t['disagreements']}")
+    lines += twin_lines(fig, pct)
     per = ", ".join(f"{k} {v:.2f}" for k, v in fig["seconds"]["median_per_skill_s"].items())
     lines.append(f"  seconds      median wall per full-robot run [s]: {per}; "
                  f"total {fig['seconds']['total_s']:.0f} s")  # fmt: skip
     return "\n".join(lines)
+
+
+def twin_lines(fig: dict, pct) -> list[str]:
+    """The twin's report lines: the reported twin, then one line per physics step
+    when several ran."""
+    t = fig["twin"]
+    lines = [f"  twin         agreement {pct(t['agreement'])} (strict "
+             f"{pct(t['agreement_strict'])}), speed-up {t['speedup'] or 0:.1f}x "
+             f"(cold {t['speedup_cold'] or 0:.1f}x)",
+             f"               disagreements (full vs twin) {t['disagreements']}"]  # fmt: skip
+    steps = fig.get("twin_steps", {})
+    if len(steps) > 1:
+        for k, t in steps.items():
+            lines.append(f"  twin {float(k) * 1e3:4.1f} ms agreement {pct(t['agreement'])} "
+                         f"(strict {pct(t['agreement_strict'])}), speed-up "
+                         f"{t['speedup'] or 0:.1f}x")  # fmt: skip
+    return lines
 
 
 if __name__ == "__main__":

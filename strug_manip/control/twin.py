@@ -122,13 +122,21 @@ class PlanningTwin:
     Args:
         spec: the cabinet (e.g. a belief particle), compiled in memory.
         config: the rest of the scene (default: the built-in one); its cabinet, robot and
-            time step are replaced by ``spec``, the floating hand and :data:`TIMESTEP`.
+            time step are replaced by ``spec``, the floating hand and ``timestep``.
         ctx: shared IK solvers and the placement cache (default: a new context).
         params: the skills' constants (default :data:`DEFAULT_PARAMS`).
         checked: the placement search checks the Fetch's collisions as the full robot's
             does (in a world of the same cabinet with the Fetch, built on first use),
             so the twin predicts the same placement and ``ik_infeasible``; False:
             kinematic only (faster on a cold cache, less faithful).
+        timestep: the twin's physics step [s] (default :data:`TIMESTEP`): a smaller
+            step agrees with the full robot more often and costs proportionally more
+            (``tools/eval_skills.py --twin-steps`` measures both; the README has the
+            figures).
+
+    Raises:
+        ConfigError: ``spec`` is not a :class:`CabinetSpec`, or ``timestep`` is not a
+            positive number of at most 0.01 s.
     """
 
     def __init__(
@@ -138,12 +146,13 @@ class PlanningTwin:
         ctx: ControlContext | None = None,
         params: SkillParams = DEFAULT_PARAMS,
         checked: bool = True,
+        timestep: float = TIMESTEP,
     ) -> None:
         if not isinstance(spec, CabinetSpec):
             raise ConfigError(f"spec must be a CabinetSpec, got {spec!r}")
         base = config or SceneConfig()
-        cfg = dataclasses.replace(
-            base, cabinet_spec=spec, cabinet_folder=None, robot="gripper", timestep=TIMESTEP
+        cfg = dataclasses.replace(  # SceneConfig validates the step
+            base, cabinet_spec=spec, cabinet_folder=None, robot="gripper", timestep=timestep
         )
         self.world = ManipulationWorld(cfg)
         self._robot_config = dataclasses.replace(
@@ -443,7 +452,8 @@ class PlanningTwin:
                       **dict(zip(ARM_TORSO_JOINTS, q.tolist(), strict=True))}  # fmt: skip
             return servo.response(planned, base_inertia(self.ctx.ik.model, joints))
 
-        return self.ctx.memo(("twin base", id(placement), len(planned)), respond)  # type: ignore[return-value]
+        dt = self.world.model.opt.timestep  # twins of other steps may share the placement
+        return self.ctx.memo(("twin base", id(placement), dt, len(planned)), respond)  # type: ignore[return-value]
 
     def _parked_arm(self) -> np.ndarray:
         """The arm links' poses (L, 7) out of the scene (:data:`ARM_PARK`)."""
@@ -452,7 +462,8 @@ class PlanningTwin:
     def _memo_arm(self, key: tuple, joints: np.ndarray) -> np.ndarray:
         """The arm links' poses (n, L, 7) along ``joints`` (n, 3 + 8: base x, y, yaw,
         then torso and arm [m, rad]), memoised by ``key``."""
-        return self.ctx.memo(("twin arm", *key), lambda: self._arm_poses(joints))  # type: ignore[return-value]
+        key = ("twin arm", self.world.model.opt.timestep, *key)  # sampled at the step
+        return self.ctx.memo(key, lambda: self._arm_poses(joints))  # type: ignore[return-value]
 
     def _arm_poses(self, joints: np.ndarray) -> np.ndarray:
         out = np.empty((len(joints), len(ARM_LINKS), 7))
@@ -474,7 +485,7 @@ class PlanningTwin:
         pw = self._planning(plan_world)
         if pw is None:
             return None
-        key = ("twin stow", id(pw), id(placement))
+        key = ("twin stow", id(pw), id(placement), self.world.model.opt.timestep)
         try:
             return self.ctx.memo(key, lambda: self._stow_path(placement, pw))  # type: ignore[return-value]
         except SkillStop:
