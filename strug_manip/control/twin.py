@@ -33,7 +33,8 @@ the same :class:`~strug_manip.control.outcome.Outcome`:
    execution.plan_stow`) until they are clear of the cabinet, leave the scene, and the
    cabinet and the object settle for :data:`COAST_TIME`, and on while the cabinet still
    moves (:data:`REST_SPEED`), up to the rest of the stow's duration (a drawer of a
-   dragged, tilted cabinet creeps on while the full robot stows). Where a line moves
+   dragged, tilted cabinet creeps on while the full robot stows); everything after the
+   last release runs :data:`FREE_COARSENING` times coarser. Where a line moves
    the base, the hand's command moves with the full robot's base as it lags and
    overshoots its command (:class:`~.base_servo.BaseServo`); the monitors compare the
    hand with the plan, as the full robot's compare it with its command.
@@ -93,6 +94,11 @@ from strug_manip.world.sim import ManipulationWorld, WorldState
 #: joint stops (a 4 ms time constant) soften to MuJoCo's floor of two steps, and the
 #: twin still agrees with the full robot (``tools/eval_skills.py`` measures it).
 TIMESTEP = 0.005
+#: After the last release (the fingers open, the hand backs away in free space: the
+#: retreat, the withdraw, the stow, the coast) the twin steps this many times coarser
+#: [-]: those motions rarely touch anything, and a knock of a door or drawer on the way
+#: out is decided by where the hand goes, not by the contact's stiffness.
+FREE_COARSENING = 2
 #: After its last release the hand leaves the scene (its geoms stop colliding: the full
 #: robot backs away and stows) and the cabinet and object settle for this long [s].
 COAST_TIME = 0.25
@@ -360,8 +366,15 @@ class PlanningTwin:
     # -- the program ------------------------------------------------------------------
     def program(self, plan: SkillPlan, plan_world: ManipulationWorld | None = None) -> Program:
         """The controls that run ``plan`` (made against ``plan_world``) on the twin, from
-        its placement (raises :class:`SkillStop` ``ik_infeasible`` if there is none)."""
+        its placement (raises :class:`SkillStop` ``ik_infeasible`` if there is none);
+        memoised per placement, planning world and step, as the placement is (a search
+        simulates the same skill on a particle many times)."""
         placement = self._placement(plan, plan_world)
+        key = ("twin program", id(placement), id(self._planning(plan_world)),
+               self.world.model.opt.timestep, self.params)  # fmt: skip
+        return self.ctx.memo(key, lambda: self._program(placement, plan_world))  # type: ignore[return-value]
+
+    def _program(self, placement: Placement, plan_world: ManipulationWorld | None) -> Program:
         plan = placement.plan
         dt = self.world.model.opt.timestep
         p = self.params
@@ -397,6 +410,7 @@ class PlanningTwin:
 
         k = 0
         released = False
+        free: int | None = None  # the first step after the last release
         stow = self._stow_commands(placement, plan_world)
         for ph in plan.phases:
             if isinstance(ph, Grip):
@@ -404,6 +418,7 @@ class PlanningTwin:
                 tol = p.tracking_tolerance
                 hold(p.grip_time, ph.name, False)
                 released = not ph.closed
+                free = sum(len(x) for x in pos) if released else None
                 continue
             if k == 0 and ph.name == "approach":  # free space: the hand starts at its end
                 start = ph.poses[-1]
@@ -434,9 +449,10 @@ class PlanningTwin:
         pos_, quat_, planned = cat(pos), cat(quat), cat(bases)
         actual = self._base_response(placement, planned)
         drive_pos, drive_quat = _with_base(pos_, quat_, planned, actual)
+        free = len(pos_) if free is None or ends_holding(plan) else free
         return Program(plan, placement, pos_, quat_, cat(grips), cat(names), cat(held),
                        cat(holds), cat(tols), start, coast, cat(arms), drive_pos,
-                       drive_quat)  # fmt: skip
+                       drive_quat, free)  # fmt: skip
 
     def _base_response(self, placement: Placement, planned: np.ndarray) -> np.ndarray:
         """Where the full robot's base is (n, 3) when commanded ``planned`` (n, 3) one
@@ -635,6 +651,48 @@ class PlanningTwin:
                 )
         return len(lag) - 1, Status.OK, "", ""
 
+    def after(
+        self, prog: Program, ctrl: np.ndarray, states: np.ndarray, judged: tuple
+    ) -> tuple[np.ndarray | None, tuple[int, Status, str, str]]:
+        """What follows the rollout ``states`` of the program's steps before
+        ``prog.free`` (``ctrl``: the whole program's controls), as the full robot goes
+        on: after a stop the recovery; else the free steps (after the last release)
+        :data:`FREE_COARSENING` times coarser, monitored, and the recovery if they stop;
+        then the coast with the hand out of the scene. Returns the states that follow
+        the head's judged step (None if none) and the run's verdict, its step index
+        that of the head's last state when the head ran through."""
+        m = self.world.model
+        dt = m.opt.timestep
+        k, status = judged[0], judged[1]
+        start, parts, final = states[k], [], judged
+        stop_prog, stop_k, last = prog, k, ctrl[k : k + 1]
+        try:
+            if status is Status.OK and prog.free < len(prog.pos):
+                m.opt.timestep = dt * FREE_COARSENING
+                sl = slice(prog.free, None, FREE_COARSENING)
+                stop_prog, tail_ctrl = prog.steps(sl), ctrl[sl]
+                st, _ = rollout.rollout(m, self.world.data, start[None], tail_ctrl[None],
+                                        control_spec=_CONTROL)  # fmt: skip
+                j = self.judge(stop_prog, st[0])
+                stop_k, start, last = j[0], st[0][j[0]], tail_ctrl[j[0] : j[0] + 1]
+                parts.append(st[0][: j[0] + 1])
+                final = (k, *j[1:])
+            elif status is Status.OK and not prog.coast:
+                return None, judged  # ends holding: nothing follows
+            if final[1] is not Status.OK:
+                self.grip_cmd_at_stop = float(stop_prog.grip[stop_k])
+                extra = self.recovery(stop_prog, start)
+                rec, _ = rollout.rollout(m, self.world.data, start[None], extra[None],
+                                         control_spec=_CONTROL)  # fmt: skip
+                parts.append(rec[0])
+                start, last = rec[0][-1], extra[-1:]
+            budget = prog.coast if final[1] is Status.OK else 0
+            budget = round(budget * dt / m.opt.timestep)
+            parts.append(self.coast(start, self.park_arm(last), budget))
+        finally:
+            m.opt.timestep = dt
+        return np.concatenate(parts), final
+
     def finish(
         self,
         prog: Program,
@@ -663,9 +721,11 @@ class PlanningTwin:
             self.grip_cmd = self._recovery_grip
             self.set_robot_base(prog.placement.base)
         w.data.ctrl[self._grip_ctrl] = self.grip_cmd
-        every = max(1, round(self.params.record_period / m.opt.timestep))
-        rows = states[: k + 1 : every, 1 : 1 + m.nq]
-        times = states[: k + 1 : every, 0] - self.t0
+        # One row per record period (the steps after the last release are coarser).
+        t = states[: k + 1, 0] - self.t0
+        slot = np.floor(t / self.params.record_period + 1e-6)
+        keep = np.flatnonzero(np.diff(slot, prepend=-1.0) > 0)
+        rows, times = states[keep, 1 : 1 + m.nq], t[keep]
         return self._outcome(prog.plan, status, detail, phase, parts0, cab0, t_wall,
                              prog.placement.seconds, times, rows, physics)  # fmt: skip
 
@@ -896,6 +956,8 @@ class Program:
             lags behind or overshoots its command (:class:`~.base_servo.BaseServo`);
             the monitors compare the hand with ``pos``, as the full robot's compare
             it with its command.
+        free: the first step after the last release (the hand moves freely from
+            there; :data:`FREE_COARSENING`), ``nstep`` when the skill ends holding.
     """
 
     plan: SkillPlan
@@ -912,6 +974,14 @@ class Program:
     arm: np.ndarray
     drive_pos: np.ndarray
     drive_quat: np.ndarray
+    free: int
+
+    def steps(self, sl: slice) -> Program:
+        """The program's steps ``sl`` (e.g. ``slice(free, None, 2)``), as a program."""
+        per_step = ("pos", "quat", "grip", "names", "held", "holds", "tol", "arm",
+                    "drive_pos", "drive_quat")  # fmt: skip
+        cut = {f: getattr(self, f)[sl] for f in per_step}
+        return dataclasses.replace(self, **cut, free=len(cut["pos"]))
 
 
 @dataclass(frozen=True, eq=False)
@@ -991,38 +1061,18 @@ def run_batch(
             mujoco.mj_getState(tw.world.model, tw.world.data, st, _ROLLOUT_STATE)
             states0.append(st)
         ctrl = ts[0].controls(prog)
+        head = prog.steps(slice(0, prog.free))
         t = time.perf_counter()
         states, _ = rollout.rollout(
-            [tw.world.model for tw in ts], ts[0].world.data, np.array(states0), ctrl[None],
-            control_spec=_CONTROL,
+            [tw.world.model for tw in ts], ts[0].world.data, np.array(states0),
+            ctrl[None, : prog.free], control_spec=_CONTROL,
         )  # fmt: skip
         physics = (time.perf_counter() - t) / len(ts)
-        judged = [tw.judge(p, st) for (_, p), tw, st in zip(members, ts, states, strict=True)]
-        # What follows the programs: after a stop the recovery, then (as after a last
-        # release) the coast with the hand out of the scene.
-        follow: dict[int, np.ndarray] = {}
-        for n, (j, tw, st) in enumerate(zip(judged, ts, states, strict=True)):
-            k, status = j[0], j[1]
-            if status is Status.OK:
-                if prog.coast:
-                    follow[n] = np.zeros((0, ctrl.shape[1]))
-                continue
-            tw.grip_cmd_at_stop = float(prog.grip[k])
-            follow[n] = tw.recovery(prog, st[k])
-        tails: dict[int, np.ndarray] = {}
+        judged = [tw.judge(head, st) for tw, st in zip(ts, states, strict=True)]
         t = time.perf_counter()
-        for n, extra in follow.items():
-            tw, k = ts[n], judged[n][0]
-            start = states[n][k]
-            if len(extra):  # the recovery, the hand in the scene
-                rec, _ = rollout.rollout(tw.world.model, tw.world.data, start[None], extra[None],
-                                         control_spec=_CONTROL)  # fmt: skip
-                start, tails[n] = rec[0][-1], rec[0]
-            last = tw.park_arm(extra[-1:] if len(extra) else ctrl[k : k + 1])
-            budget = prog.coast if judged[n][1] is Status.OK else 0
-            tl = tw.coast(start, last, budget)
-            tails[n] = np.concatenate([tails[n], tl]) if n in tails else tl
+        after = [tw.after(prog, ctrl, st, j) for tw, st, j in zip(ts, states, judged, strict=True)]
         physics += (time.perf_counter() - t) / len(ts)
         for n, ((i, p), tw, st) in enumerate(zip(members, ts, states, strict=True)):
-            outs[i] = tw.finish(p, st, judged[n], tails.get(n), tw._t_wall, physics)
+            tail, final = after[n]
+            outs[i] = tw.finish(p, st, final, tail, tw._t_wall, physics)
     return [o for o in outs if o is not None]
