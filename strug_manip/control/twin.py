@@ -47,6 +47,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
+from collections import OrderedDict
 from dataclasses import dataclass
 
 import mujoco
@@ -96,9 +97,12 @@ from strug_manip.world.sim import ManipulationWorld, WorldState
 TIMESTEP = 0.005
 #: After the last release (the fingers open, the hand backs away in free space: the
 #: retreat, the withdraw, the stow, the coast) the twin steps this many times coarser
-#: [-]: those motions rarely touch anything, and a knock of a door or drawer on the way
-#: out is decided by where the hand goes, not by the contact's stiffness.
+#: [-]: those motions seldom touch anything, and they are about 40 % of a run's steps.
+#: Where they do touch (an arm link knocking an open door on the stow), the coarser
+#: step can knock harder (1 of 200 tuning runs changed; README).
 FREE_COARSENING = 2
+#: Programs a twin keeps, the most recently used (:meth:`PlanningTwin.program`).
+PROGRAMS = 32
 #: After its last release the hand leaves the scene (its geoms stop colliding: the full
 #: robot backs away and stows) and the cabinet and object settle for this long [s].
 COAST_TIME = 0.25
@@ -168,6 +172,7 @@ class PlanningTwin:
         self.params = params
         self.checked = bool(checked)
         self._planning_world: ManipulationWorld | None = None
+        self._programs: OrderedDict[tuple[int, int], Program] = OrderedDict()
         self._base_servo: BaseServo | None = None
         m = self.world.model
         self._slide_adr = np.array([m.jnt_qposadr[m.joint(j).id] for j in SLIDES])
@@ -367,12 +372,18 @@ class PlanningTwin:
     def program(self, plan: SkillPlan, plan_world: ManipulationWorld | None = None) -> Program:
         """The controls that run ``plan`` (made against ``plan_world``) on the twin, from
         its placement (raises :class:`SkillStop` ``ik_infeasible`` if there is none);
-        memoised per placement, planning world and step, as the placement is (a search
-        simulates the same skill on a particle many times)."""
+        the twin keeps its last :data:`PROGRAMS` programs (a search simulates the same
+        skill on a particle many times; a program holds the arm's poses at every step,
+        a few hundred kB, too much for the context's cache of thousands of entries)."""
         placement = self._placement(plan, plan_world)
-        key = ("twin program", id(placement), id(self._planning(plan_world)),
-               self.world.model.opt.timestep, self.params)  # fmt: skip
-        return self.ctx.memo(key, lambda: self._program(placement, plan_world))  # type: ignore[return-value]
+        key = (id(placement), id(self._planning(plan_world)))
+        prog = self._programs.pop(key, None)
+        if prog is None or prog.placement is not placement:
+            prog = self._program(placement, plan_world)
+        self._programs[key] = prog
+        while len(self._programs) > PROGRAMS:
+            self._programs.popitem(last=False)
+        return prog
 
     def _program(self, placement: Placement, plan_world: ManipulationWorld | None) -> Program:
         plan = placement.plan
