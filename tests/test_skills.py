@@ -28,6 +28,7 @@ generator seeds :data:`SLOW_SEEDS`.
 
 from __future__ import annotations
 
+import gc
 import itertools
 import math
 from dataclasses import dataclass
@@ -56,6 +57,7 @@ from strug_manip.control import (
     run_batch,
 )
 from strug_manip.control.execution import TUCKED_TOLERANCE
+from strug_manip.control.outcome import SkillStop
 from strug_manip.control.placement import WHOLE_BODY_LINES
 from strug_manip.domains.manipulation.rules import dragged, inside, open_enough
 from strug_manip.objects.hypotheses import BelievedJoint, believed_spec, cell_joints, model_of
@@ -604,6 +606,31 @@ def test_run_batch_equals_per_twin_runs(worlds, ctx) -> None:
         assert a.same_as(b), (a.summary(), b.summary())
     # The particles differ: the batch did not hand one outcome to all.
     assert not alone[0].same_as(alone[1]) and not alone[0].same_as(alone[2])
+
+
+def test_what_the_twin_derives_from_a_placement_goes_with_it(worlds) -> None:
+    """The twin keeps what it derives from a placement (servos, base response, arm and
+    stow paths) per placement *object*, not per id: a simulation again finds it, and
+    once the context's cache and the twin's programs let the placement go, nothing of
+    it is left for a new placement at the same address to find."""
+    world = worlds["mixed_17"]
+    spec, T = world.scene.cabinet_spec, world.scene.T_world_cabinet
+    ctx = ControlContext(max_placements=2)
+    twin = PlanningTwin(spec, world.config, ctx)
+    part = spec.part("link_5")
+    skill = OpenDoor(handle_grasps(part, 0.0, T)[0], BelievedJoint.of_part(part, 0.0, T))
+    twin.reset()
+    first = skill.simulate(twin)
+    assert len(twin._derived) == 1
+    twin.reset()
+    assert skill.simulate(twin).same_as(first) and len(twin._derived) == 1
+    for i in range(ctx.max_placements):  # other placements push it out of the context
+        ctx.store_placement(("another", i), SkillStop(Status.IK_INFEASIBLE, "filler"))
+    twin._programs.clear()
+    gc.collect()
+    assert len(twin._derived) == 0
+    twin.reset()
+    assert skill.simulate(twin).same_as(first)  # found anew, the same
 
 
 # --- 5. determinism ---------------------------------------------------------------------

@@ -47,7 +47,9 @@ from __future__ import annotations
 
 import dataclasses
 import time
+import weakref
 from collections import OrderedDict
+from collections.abc import Callable, Hashable
 from dataclasses import dataclass
 
 import mujoco
@@ -173,6 +175,9 @@ class PlanningTwin:
         self.checked = bool(checked)
         self._planning_world: ManipulationWorld | None = None
         self._programs: OrderedDict[tuple[int, int], Program] = OrderedDict()
+        # What the twin derives from each placement (servos, base response, arm and
+        # stow paths), dropped with the placement (:meth:`_of`).
+        self._derived: weakref.WeakKeyDictionary[Placement, dict] = weakref.WeakKeyDictionary()
         self._base_servo: BaseServo | None = None
         m = self.world.model
         self._slide_adr = np.array([m.jnt_qposadr[m.joint(j).id] for j in SLIDES])
@@ -352,9 +357,8 @@ class PlanningTwin:
         m = self.world.model
         base, q = placement.start_of(1 if placement.lines else 0)
         whole_body = any(bp is not None for bp in placement.base_paths)
-        axes, kp, force, torque = self.ctx.memo(  # type: ignore[misc]
-            ("twin servo", id(placement)),
-            lambda: arm_servo(self.ctx, base, q, whole_body),
+        axes, kp, force, torque = self._of(  # type: ignore[misc]
+            placement, "servo", lambda: arm_servo(self.ctx, base, q, whole_body)
         )
         self._axes = axes
         for i, a in enumerate(self._slide_act):
@@ -441,7 +445,11 @@ class PlanningTwin:
             base = joints[-1, :3]
             # After the last release the arm moves freely, along its joint path: its
             # links may sweep the cabinet (e.g. back out of a drawer).
-            arm = self._memo_arm(("line", id(placement), k), joints) if released else None
+            arm = (
+                self._of(placement, ("arm", k), lambda j=joints: self._arm_poses(j))
+                if released
+                else None
+            )
             add(ps, qs, ph.name, False, ph.holding, arm)
             bases[-1] = joints[:, :3]
             here = (ps[-1], qs[-1])
@@ -479,18 +487,28 @@ class PlanningTwin:
                       **dict(zip(ARM_TORSO_JOINTS, q.tolist(), strict=True))}  # fmt: skip
             return servo.response(planned, base_inertia(self.ctx.ik.model, joints))
 
-        dt = self.world.model.opt.timestep  # twins of other steps may share the placement
-        return self.ctx.memo(("twin base", id(placement), dt, len(planned)), respond)  # type: ignore[return-value]
+        return self._of(placement, ("base", len(planned)), respond)  # type: ignore[return-value]
 
     def _parked_arm(self) -> np.ndarray:
         """The arm links' poses (L, 7) out of the scene (:data:`ARM_PARK`)."""
         return np.tile(np.r_[ARM_PARK, 1.0, 0.0, 0.0, 0.0], (len(ARM_LINKS), 1))
 
-    def _memo_arm(self, key: tuple, joints: np.ndarray) -> np.ndarray:
-        """The arm links' poses (n, L, 7) along ``joints`` (n, 3 + 8: base x, y, yaw,
-        then torso and arm [m, rad]), memoised by ``key``."""
-        key = ("twin arm", self.world.model.opt.timestep, *key)  # sampled at the step
-        return self.ctx.memo(key, lambda: self._arm_poses(joints))  # type: ignore[return-value]
+    def _of(self, placement: Placement, key: Hashable, compute: Callable[[], object]) -> object:
+        """What ``compute()`` gave for ``placement`` and ``key`` before, else its result,
+        kept as long as the placement lives (a :class:`SkillStop` it raises is kept and
+        raised again). Keyed by the placement object, not its id: a placement the
+        context's cache lets go takes what was derived from it along, so a new one
+        at the same address cannot find it."""
+        table = self._derived.setdefault(placement, {})
+        if key not in table:
+            try:
+                table[key] = compute()
+            except SkillStop as stop:
+                table[key] = stop
+        found = table[key]
+        if isinstance(found, SkillStop):
+            raise found
+        return found
 
     def _arm_poses(self, joints: np.ndarray) -> np.ndarray:
         out = np.empty((len(joints), len(ARM_LINKS), 7))
@@ -512,9 +530,8 @@ class PlanningTwin:
         pw = self._planning(plan_world)
         if pw is None:
             return None
-        key = ("twin stow", id(pw), id(placement), self.world.model.opt.timestep)
         try:
-            return self.ctx.memo(key, lambda: self._stow_path(placement, pw))  # type: ignore[return-value]
+            return self._of(placement, ("stow", id(pw)), lambda: self._stow_path(placement, pw))  # type: ignore[return-value]
         except SkillStop:
             return None
 
