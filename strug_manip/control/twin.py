@@ -174,10 +174,13 @@ class PlanningTwin:
         self.params = params
         self.checked = bool(checked)
         self._planning_world: ManipulationWorld | None = None
-        self._programs: OrderedDict[tuple[int, int], Program] = OrderedDict()
+        self._programs: OrderedDict[tuple[Placement, object], Program] = OrderedDict()
         # What the twin derives from each placement (servos, base response, arm and
         # stow paths), dropped with the placement (:meth:`_of`).
         self._derived: weakref.WeakKeyDictionary[Placement, dict] = weakref.WeakKeyDictionary()
+        self._world_tokens: weakref.WeakKeyDictionary[ManipulationWorld, object] = (
+            weakref.WeakKeyDictionary()
+        )
         self._base_servo: BaseServo | None = None
         m = self.world.model
         self._slide_adr = np.array([m.jnt_qposadr[m.joint(j).id] for j in SLIDES])
@@ -270,12 +273,19 @@ class PlanningTwin:
             state = np.round(pw.data.qpos[pw.cabinet_qpos_indices()], 3).tobytes()
         obj = np.round(self.world.data.qpos[self._obj_adr : self._obj_adr + 7], 3).tobytes()
         return self.ctx.placement(
-            ("twin", id(pw), plan.key, base.round(4).tobytes(), state, obj),
+            ("twin", self._token(pw), plan.key, base.round(4).tobytes(), state, obj),
             lambda: find_placement(
                 plan, self.ctx.ik, self.ctx.wb_ik, base, (np.array(TUCK), reach),
                 (self.vmax, _BASE_SPEED), self._checker(plan, base, pw),
             ),
         )  # fmt: skip
+
+    def _token(self, pw: ManipulationWorld | None) -> object:
+        """A key for planning world ``pw`` in the context's placement cache: an object
+        made for it (not its id, which a later world may reuse once it is gone)."""
+        if pw is None:
+            return None
+        return self._world_tokens.setdefault(pw, object())
 
     def _planning(self, plan_world: ManipulationWorld | None) -> ManipulationWorld | None:
         """The world of the placement's collision checks: ``plan_world``, else a world of
@@ -380,9 +390,9 @@ class PlanningTwin:
         skill on a particle many times; a program holds the arm's poses at every step,
         a few hundred kB, too much for the context's cache of thousands of entries)."""
         placement = self._placement(plan, plan_world)
-        key = (id(placement), id(self._planning(plan_world)))
+        key = (placement, self._token(self._planning(plan_world)))
         prog = self._programs.pop(key, None)
-        if prog is None or prog.placement is not placement:
+        if prog is None:
             prog = self._program(placement, plan_world)
         self._programs[key] = prog
         while len(self._programs) > PROGRAMS:
@@ -531,7 +541,8 @@ class PlanningTwin:
         if pw is None:
             return None
         try:
-            return self._of(placement, ("stow", id(pw)), lambda: self._stow_path(placement, pw))  # type: ignore[return-value]
+            return self._of(placement, ("stow", self._token(pw)),  # type: ignore[return-value]
+                            lambda: self._stow_path(placement, pw))  # fmt: skip
         except SkillStop:
             return None
 
