@@ -673,22 +673,16 @@ class PlanningTwin:
         lost = check & prog.held & (fingers < FINGERS_EMPTY)
         blocked = check & (lag > prog.tol)
         blocked &= ~prog.holds | np.r_[prog.holds[1:] != prog.holds[:-1], False]
-        for k in range(len(lag)):
-            if lost[k]:
-                return (
-                    k,
-                    Status.GRASP_LOST,
-                    f"the fingers closed on nothing ({prog.names[k]})",
-                    str(prog.names[k]),
-                )
-            if blocked[k]:
-                return (
-                    k,
-                    Status.COLLISION,
-                    (f"the gripper is held back {lag[k]:.3f} m from its path ({prog.names[k]})"),
-                    str(prog.names[k]),
-                )
-        return len(lag) - 1, Status.OK, "", ""
+        stops = np.flatnonzero(lost | blocked)
+        if not len(stops):
+            return len(lag) - 1, Status.OK, "", ""
+        k = int(stops[0])
+        if lost[k]:
+            return (k, Status.GRASP_LOST, f"the fingers closed on nothing ({prog.names[k]})",
+                    str(prog.names[k]))  # fmt: skip
+        return (k, Status.COLLISION,
+                f"the gripper is held back {lag[k]:.3f} m from its path ({prog.names[k]})",
+                str(prog.names[k]))  # fmt: skip
 
     def after(
         self, prog: Program, ctrl: np.ndarray, states: np.ndarray, judged: tuple
@@ -773,10 +767,14 @@ class PlanningTwin:
         parked, the controls held at ``last`` (1, nu + 7 nmocap): :data:`COAST_TIME`,
         then on in such spans while a cabinet joint still moves faster than
         :data:`REST_SPEED`, up to ``budget`` steps in all (the rest of the full robot's
-        stow, during which its cabinet goes on settling); the states (n, nstate)."""
+        stow, during which its cabinet goes on settling); the states (n, nstate), just
+        ``start`` when the cabinet is at rest already (the hand, clear of the cabinet
+        by then, held nothing up)."""
         m = self.world.model
         span = max(1, round(COAST_TIME / m.opt.timestep))
         dofs = self._cabinet_dofs
+        if np.max(np.abs(start[1 + m.nq : 1 + m.nq + m.nv][dofs])) < REST_SPEED:
+            return start[None]
         out: list[np.ndarray] = []
         done = 0
         self.ghost(True)
