@@ -46,6 +46,7 @@ believed to stand (the ``robot_base`` mocap body), from which the next placement
 from __future__ import annotations
 
 import dataclasses
+import functools
 import time
 import weakref
 from collections import OrderedDict
@@ -175,6 +176,7 @@ class PlanningTwin:
         self.checked = bool(checked)
         self._planning_world: ManipulationWorld | None = None
         self._programs: OrderedDict[tuple[Placement, object], Program] = OrderedDict()
+        self._last_controls: tuple[weakref.ref, bytes, np.ndarray] | None = None
         # What the twin derives from each placement (servos, base response, arm and
         # stow paths), dropped with the placement (:meth:`_of`).
         self._derived: weakref.WeakKeyDictionary[Placement, dict] = weakref.WeakKeyDictionary()
@@ -390,7 +392,8 @@ class PlanningTwin:
         skill on a particle many times; a program holds the arm's poses at every step,
         a few hundred kB, too much for the context's cache of thousands of entries)."""
         placement = self._placement(plan, plan_world)
-        key = (placement, self._token(self._planning(plan_world)))
+        pw = plan_world if plan_world is not None or not self.checked else self._planning_world
+        key = (placement, self._token(pw))  # (_placement made the twin's own world)
         prog = self._programs.pop(key, None)
         if prog is None:
             prog = self._program(placement, plan_world)
@@ -584,8 +587,15 @@ class PlanningTwin:
     def controls(self, prog: Program) -> np.ndarray:
         """The twin's control vectors at every step of ``prog``, (nstep, nu + 7 nmocap):
         the actuators' controls, then the mocap bodies' positions and orientations
-        (:data:`_CONTROL`)."""
-        return self._controls(prog.drive_pos, prog.drive_quat, prog.grip, prog.holds, prog.arm)
+        (:data:`_CONTROL`); the last ones are kept while the program and the controls
+        it does not set (the data's ``ctrl`` and mocap poses) stay the same."""
+        d = self.world.data
+        rest = d.ctrl.tobytes() + d.mocap_pos.tobytes() + d.mocap_quat.tobytes()
+        last = self._last_controls  # (a weak reference to the program: it is not kept)
+        if last is None or last[0]() is not prog or last[1] != rest:
+            ctrl = self._controls(prog.drive_pos, prog.drive_quat, prog.grip, prog.holds, prog.arm)
+            last = self._last_controls = (weakref.ref(prog), rest, ctrl)
+        return last[2]
 
     def recovery(self, prog: Program, state: np.ndarray) -> np.ndarray:
         """The controls (nstep, nu) of the full robot's recovery after a stop in
@@ -668,7 +678,7 @@ class PlanningTwin:
         every = max(1, round(0.01 / m.opt.timestep))
         check = np.zeros(len(lag), dtype=bool)
         check[every - 1 :: every] = True
-        check[np.flatnonzero(np.diff(prog.names != np.roll(prog.names, -1)))] = True
+        check[prog.phase_ends] = True
         check[-1] = True
         lost = check & prog.held & (fingers < FINGERS_EMPTY)
         blocked = check & (lag > prog.tol)
@@ -1012,6 +1022,11 @@ class Program:
     drive_pos: np.ndarray
     drive_quat: np.ndarray
     free: int
+
+    @functools.cached_property
+    def phase_ends(self) -> np.ndarray:
+        """Steps around which the phase changes, where the monitors check too, (k,)."""
+        return np.flatnonzero(np.diff(self.names != np.roll(self.names, -1)))
 
     def steps(self, sl: slice) -> Program:
         """The program's steps ``sl`` (e.g. ``slice(free, None, 2)``), as a program."""
