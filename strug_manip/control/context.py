@@ -103,12 +103,6 @@ class ControlContext:
         while len(self._placements) > self.max_placements:
             self._placements.popitem(last=False)
 
-    def memo(self, key: Hashable, compute: Callable[[], object]) -> object:
-        """What ``compute()`` gave for ``key`` before (kept among the placements, e.g. a
-        stow path), else its result, kept; a :class:`SkillStop` it raises is kept and
-        raised again."""
-        return self.placement(key, compute)  # type: ignore[arg-type]
-
     def placement(self, key: Hashable, search: Callable[[], Placement]) -> Placement:
         """The placement cached for ``key``, else ``search()``'s (cached, as is the
         :class:`SkillStop` it raises when it finds none, which is raised again)."""

@@ -176,7 +176,6 @@ class PlanningTwin:
         self.checked = bool(checked)
         self._planning_world: ManipulationWorld | None = None
         self._programs: OrderedDict[tuple[Placement, object], Program] = OrderedDict()
-        self._last_controls: tuple[weakref.ref, bytes, np.ndarray] | None = None
         # What the twin derives from each placement (servos, base response, arm and
         # stow paths), dropped with the placement (:meth:`_of`).
         self._derived: weakref.WeakKeyDictionary[Placement, dict] = weakref.WeakKeyDictionary()
@@ -508,20 +507,13 @@ class PlanningTwin:
 
     def _of(self, placement: Placement, key: Hashable, compute: Callable[[], object]) -> object:
         """What ``compute()`` gave for ``placement`` and ``key`` before, else its result,
-        kept as long as the placement lives (a :class:`SkillStop` it raises is kept and
-        raised again). Keyed by the placement object, not its id: a placement the
-        context's cache lets go takes what was derived from it along, so a new one
-        at the same address cannot find it."""
+        kept as long as the placement lives. Keyed by the placement object, not its id:
+        a placement the context's cache lets go takes what was derived from it along,
+        so a new one at the same address cannot find it."""
         table = self._derived.setdefault(placement, {})
         if key not in table:
-            try:
-                table[key] = compute()
-            except SkillStop as stop:
-                table[key] = stop
-        found = table[key]
-        if isinstance(found, SkillStop):
-            raise found
-        return found
+            table[key] = compute()
+        return table[key]
 
     def _arm_poses(self, joints: np.ndarray) -> np.ndarray:
         out = np.empty((len(joints), len(ARM_LINKS), 7))
@@ -543,14 +535,14 @@ class PlanningTwin:
         pw = self._planning(plan_world)
         if pw is None:
             return None
+        return self._of(placement, ("stow", self._token(pw)),  # type: ignore[return-value]
+                        lambda: self._stow_path(placement, pw))  # fmt: skip
+
+    def _stow_path(self, placement: Placement, pw: ManipulationWorld) -> Stow | None:
         try:
-            return self._of(placement, ("stow", self._token(pw)),  # type: ignore[return-value]
-                            lambda: self._stow_path(placement, pw))  # fmt: skip
+            stow = plan_stow(self.ctx, pw, placement, self.params, STOW_SEED)
         except SkillStop:
             return None
-
-    def _stow_path(self, placement: Placement, pw: ManipulationWorld) -> Stow:
-        stow = plan_stow(self.ctx, pw, placement, self.params, STOW_SEED)
         dt = self.world.model.opt.timestep
         base, q_end = placement.start_of(len(placement.lines))
         if not len(stow):
@@ -587,15 +579,8 @@ class PlanningTwin:
     def controls(self, prog: Program) -> np.ndarray:
         """The twin's control vectors at every step of ``prog``, (nstep, nu + 7 nmocap):
         the actuators' controls, then the mocap bodies' positions and orientations
-        (:data:`_CONTROL`); the last ones are kept while the program and the controls
-        it does not set (the data's ``ctrl`` and mocap poses) stay the same."""
-        d = self.world.data
-        rest = d.ctrl.tobytes() + d.mocap_pos.tobytes() + d.mocap_quat.tobytes()
-        last = self._last_controls  # (a weak reference to the program: it is not kept)
-        if last is None or last[0]() is not prog or last[1] != rest:
-            ctrl = self._controls(prog.drive_pos, prog.drive_quat, prog.grip, prog.holds, prog.arm)
-            last = self._last_controls = (weakref.ref(prog), rest, ctrl)
-        return last[2]
+        (:data:`_CONTROL`)."""
+        return self._controls(prog.drive_pos, prog.drive_quat, prog.grip, prog.holds, prog.arm)
 
     def recovery(self, prog: Program, state: np.ndarray) -> np.ndarray:
         """The controls (nstep, nu) of the full robot's recovery after a stop in
@@ -777,28 +762,23 @@ class PlanningTwin:
         parked, the controls held at ``last`` (1, nu + 7 nmocap): :data:`COAST_TIME`,
         then on in such spans while a cabinet joint still moves faster than
         :data:`REST_SPEED`, up to ``budget`` steps in all (the rest of the full robot's
-        stow, during which its cabinet goes on settling); the states (n, nstate), just
-        ``start`` when the cabinet is at rest already (the hand, clear of the cabinet
-        by then, held nothing up)."""
+        stow, during which its cabinet goes on settling); the states (n, nstate) from
+        ``start`` on, just ``start`` when the cabinet is at rest already (the hand,
+        clear of the cabinet by then, held nothing up)."""
         m = self.world.model
         span = max(1, round(COAST_TIME / m.opt.timestep))
-        dofs = self._cabinet_dofs
-        if np.max(np.abs(start[1 + m.nq : 1 + m.nq + m.nv][dofs])) < REST_SPEED:
-            return start[None]
-        out: list[np.ndarray] = []
+        dofs = 1 + m.nq + self._cabinet_dofs  # the cabinet's velocities in a state
+        out: list[np.ndarray] = [start[None]]
         done = 0
         self.ghost(True)
         try:
-            while True:
+            while np.max(np.abs(start[dofs])) >= REST_SPEED and (done == 0 or done < budget):
                 tl, _ = rollout.rollout(m, self.world.data, start[None],
                                         np.repeat(last, span, axis=0)[None],
                                         control_spec=_CONTROL)  # fmt: skip
                 out.append(tl[0])
                 done += span
                 start = tl[0][-1]
-                qvel = start[1 + m.nq : 1 + m.nq + m.nv]
-                if done >= budget or np.max(np.abs(qvel[dofs])) < REST_SPEED:
-                    break
         finally:
             self.ghost(False)
         return np.concatenate(out)
