@@ -139,6 +139,7 @@ def run_episode(
     t0 = time.perf_counter()
     state = pomdp.sample_initial_state(world_rng)
     belief = pomdp.initial_belief(belief_rng, n_particles)
+    pomdp.on_belief(belief)
     planner = solver.planner(pomdp)
     observe = getattr(planner, "observe", None)
     names = pomdp.action_space().name
@@ -153,6 +154,7 @@ def run_episode(
         disc *= pomdp.discount
         if not done:
             belief, _ = update_belief(pomdp, belief, action, obs, belief_rng)
+            pomdp.on_belief(belief)
             if observe is not None:
                 observe(action, obs)  # lets a planner keep its tree (reuse_tree)
         rec = StepRecord(

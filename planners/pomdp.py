@@ -342,6 +342,12 @@ class GenerativePOMDP(ABC):
         """
         return None
 
+    def on_belief(self, belief: ParticleBelief) -> None:
+        """Told the runner's belief after it is made and after every update (default:
+        nothing). A domain whose real world needs the belief to act (the manipulation
+        tasks plan the real robot's skills against the likeliest models) keeps it."""
+        return None
+
     def rollout_policy(self) -> RolloutPolicy | None:
         """The domain's rollout heuristic (``rollout="heuristic"`` in the tree solvers).
 

@@ -22,6 +22,7 @@ import dataclasses
 import json
 import os
 import sys
+import textwrap
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -38,7 +39,14 @@ from strug_manip.cli_args import (
     positive_seconds,
 )
 from strug_manip.domains import DOMAIN_SUMMARIES, DOMAINS, make_domain
-from strug_manip.experiments.bench import RESULTS, BenchSpec, load_results, run_bench, solver_config
+from strug_manip.experiments.bench import (
+    RESULTS,
+    BenchSpec,
+    budget_for,
+    load_results,
+    run_bench,
+    solver_config,
+)
 from strug_manip.experiments.episode import DEFAULT_PARTICLES, StepRecord, run_episode
 from strug_manip.experiments.executors import EXECUTORS
 from strug_manip.experiments.table import to_markdown
@@ -167,7 +175,13 @@ def build_parser() -> argparse.ArgumentParser:
     scene.add_argument("--height", type=positive_int, default=720, help="image height [px]")
 
     demo = sub.add_parser("demo", help="a short Table I run of the toy domains (resumes)")
-    demo.add_argument("--out", type=Path, default=Path("runs/demo"), help="output directory")
+    demo.add_argument(
+        "--out", type=Path, default=Path("runs/demo"),
+        help="runs/demo: the episode's runs/demo.rrd and runs/demo.png (--toy: a directory)",
+    )  # fmt: skip
+    demo.add_argument(
+        "--toy", action="store_true", help="a short Table I of the toy domains instead"
+    )
     demo.add_argument(
         "--workers", type=positive_int, default=os.cpu_count() or 1, help="episodes at once"
     )
@@ -232,7 +246,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     overrides = _overrides(args)
     BenchSpec((args.domain,), (args.solver,), 1, overrides, args.particles)  # validates
     pomdp = make_domain(args.domain)
-    config = solver_config(args.solver, overrides)
+    config = solver_config(args.solver, budget_for(args.domain, overrides))
     if not args.json:
         print(f"{args.domain} / {args.solver} / seed {args.seed}: {describe_config(config, pomdp)}")
     recorder = None
@@ -321,6 +335,43 @@ def cmd_scene(args: argparse.Namespace) -> int:
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
+    """The main job (one OpenDrawer episode with STRUG) or, with ``--toy``, a short
+    Table I of the toy domains."""
+    return _toy_demo(args) if args.toy else _manipulation_demo(args)
+
+
+def _manipulation_demo(args: argparse.Namespace) -> int:
+    from strug_manip.experiments.rerun_log import RerunRecorder
+    from strug_manip.experiments.rerun_manip import episode_strip
+
+    rrd, png = args.out.with_suffix(".rrd"), args.out.with_suffix(".png")
+    output_file(rrd, "--out", (".rrd",))
+    pomdp = make_domain("opendrawer")
+    config = solver_config("strug", budget_for("opendrawer", {}))
+    print(f"demo: opendrawer / strug / seed 0: {describe_config(config, pomdp)}")
+    recorder = RerunRecorder(rrd, pomdp)
+    try:
+        result = run_episode(
+            pomdp, config, 0, n_particles=DEFAULT_PARTICLES,
+            on_step=lambda rec: _show_step(rec, False), recorder=recorder,
+        )  # fmt: skip
+    finally:
+        recorder.close()
+    real = pomdp.real
+    labels = ["start", *(f"{r.step}: {r.action}" for r in result.steps)]
+    frames = [real.frames[0], *real.frames[pomdp.views :]]
+    episode_strip([f.rgb for f in frames], png, [textwrap.shorten(x, 38) for x in labels])
+    print(f"cabinet seed {real.seed}, target {real.target}: {pomdp.report()}")
+    pomdp.close()
+    print(
+        f"discounted return: {result.discounted_return:+.3f} ({len(result.steps)} steps, "
+        f"{result.seconds:.1f} s); wrote {rrd} (open with: rerun {rrd}) and {png}.\n"
+        "The toy columns of Table I in a few minutes: strug demo --toy"
+    )
+    return 0
+
+
+def _toy_demo(args: argparse.Namespace) -> int:
     spec = BenchSpec(DEMO_DOMAINS, DEMO_SOLVERS, DEMO_SEEDS, {"sims": DEMO_SIMS})
     print(
         f"demo: {len(spec.tasks())} episodes ({', '.join(DEMO_SOLVERS)} on "

@@ -10,9 +10,7 @@ os.environ.setdefault("MUJOCO_GL", "egl")  # before anything imports mujoco
 import numpy as np
 import pytest
 
-from strug_manip.domains import DOMAINS, make_domain
-
-TOY_DOMAINS = tuple(DOMAINS)
+from strug_manip.domains import TOY_DOMAINS, make_domain
 
 
 @pytest.fixture

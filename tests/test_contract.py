@@ -9,7 +9,7 @@ import pytest
 
 from planners.solvers import SOLVERS, make_solver
 from planners.solvers.base import SearchInfo
-from strug_manip.domains import DOMAINS, make_domain
+from strug_manip.domains import TOY_DOMAINS, make_domain
 from strug_manip.experiments.episode import run_episode
 
 BUDGET = 150
@@ -25,7 +25,7 @@ def _valid_action(space, a) -> bool:
     )
 
 
-@pytest.mark.parametrize("domain", list(DOMAINS))
+@pytest.mark.parametrize("domain", list(TOY_DOMAINS))
 @pytest.mark.parametrize("solver", list(SOLVERS))
 def test_act_returns_valid_action_and_info(domain: str, solver: str) -> None:
     pomdp = make_domain(domain)
@@ -45,7 +45,7 @@ def test_act_returns_valid_action_and_info(domain: str, solver: str) -> None:
         assert np.all(np.isfinite(info.q))
 
 
-@pytest.mark.parametrize("domain", list(DOMAINS))
+@pytest.mark.parametrize("domain", list(TOY_DOMAINS))
 @pytest.mark.parametrize("solver", list(SOLVERS))
 def test_episode_runs_and_return_is_bounded(domain: str, solver: str) -> None:
     pomdp = make_domain(domain)

@@ -1,4 +1,6 @@
-"""Domains: the toy POMDPs of Table I (and, later, the manipulation tasks).
+"""Domains: the toy POMDPs of Table I and the manipulation tasks (Shelf, OpenDrawer,
+OpenDoor: :mod:`strug_manip.domains.manipulation`, imported on first use, since they
+load MuJoCo worlds and the perception network).
 
 ``make_domain(name)`` builds one by its canonical name (``DOMAINS`` lists them) or,
 for a user's own domain, by ``"package.module:Class"``: the module is imported (the
@@ -19,14 +21,36 @@ from planners.pomdp import GenerativePOMDP
 from strug_manip.domains.lightdark import LightDark1D, LightDark2D
 from strug_manip.domains.tiger import ExtendedTiger, Tiger, TigerClassic
 
-#: Canonical domain name -> constructor, in the column order of the paper's Table I.
-DOMAINS: dict[str, Callable[..., GenerativePOMDP]] = {
+
+def _manipulation(cls_name: str) -> Callable[..., GenerativePOMDP]:
+    def make(**params: Any) -> GenerativePOMDP:
+        from strug_manip.domains.manipulation import model
+
+        return getattr(model, cls_name)(**params)
+
+    make.__name__ = make.__qualname__ = cls_name
+    return make
+
+
+#: The toy domains, in the column order of the paper's Table I.
+TOY_DOMAINS: dict[str, Callable[..., GenerativePOMDP]] = {
     "tiger": Tiger,
     "tigerclassic": TigerClassic,
     "extendedtiger": ExtendedTiger,
     "lightdark1d": LightDark1D,
     "lightdark2d": LightDark2D,
 }
+#: The manipulation tasks (constructors that import their module on first use).
+MANIPULATION_DOMAINS: dict[str, Callable[..., GenerativePOMDP]] = {
+    "shelf": _manipulation("ShelfTask"),
+    "opendrawer": _manipulation("OpenDrawerTask"),
+    "opendoor": _manipulation("OpenDoorTask"),
+}
+#: Simulations per decision on the manipulation tasks when none are asked for (CLI and
+#: bench): each costs a twin's skill (tens of ms) where a toy domain's costs microseconds.
+MANIPULATION_SIMS = 20
+#: Canonical domain name -> constructor, in the column order of the paper's Table I.
+DOMAINS: dict[str, Callable[..., GenerativePOMDP]] = {**TOY_DOMAINS, **MANIPULATION_DOMAINS}
 
 #: One-line descriptions for ``strug list``.
 DOMAIN_SUMMARIES: dict[str, str] = {
@@ -35,6 +59,9 @@ DOMAIN_SUMMARIES: dict[str, str] = {
     "extendedtiger": "Tiger whose listening informs only after 3 listens in a row",
     "lightdark1d": "LightDark1D as POMDPModels.jl: localise near y=5, declare at |y|<1",
     "lightdark2d": "2D room: x is precise near the right wall, y near the top; goal |x-5|<0.5",
+    "shelf": "Fetch puts the object on an open shelf cell of an unseen cabinet (+10, drag -10)",
+    "opendrawer": "Fetch opens the target drawer of an unseen cabinet, puts the object in it",
+    "opendoor": "Fetch opens the target door of an unseen cabinet, puts the object behind it",
 }
 
 
@@ -80,6 +107,9 @@ def make_domain(name: str, **params: Any) -> GenerativePOMDP:
 __all__ = [
     "DOMAINS",
     "DOMAIN_SUMMARIES",
+    "MANIPULATION_DOMAINS",
+    "MANIPULATION_SIMS",
+    "TOY_DOMAINS",
     "ExtendedTiger",
     "LightDark1D",
     "LightDark2D",

@@ -26,6 +26,13 @@ Per step (timeline ``step``):
   action spaces also ``search/q/<action>`` and ``search/bonus/<action>`` series
   (continuous actions are new every step, so no series each);
 * ``log``: one line per step, action -> observation.
+
+The manipulation tasks (:class:`ManipulationLog`) log instead, under ``world/``, the
+robot's and the cabinet's MuJoCo geoms (static, per body) posed at every recorded
+frame of every skill the real robot ran (timeline ``sim_time``, the episode's
+simulated time), the head camera's images and the cabinet cloud it saw after each
+step (``camera``, ``camera_cloud``), and the belief: every particle's joints of the
+cabinet's parts as arrows on the cabinet, darker for more weight (``belief/joints``).
 """
 
 from __future__ import annotations
@@ -91,6 +98,7 @@ class RerunRecorder:
         self._return = 0.0
         self._path: list[np.ndarray] = []
         self.discrete_actions = pomdp.action_space().is_discrete
+        self.manipulation = ManipulationLog(self.stream) if hasattr(pomdp, "real") else None
         self._log_geometry()
 
     def _log_geometry(self) -> None:
@@ -167,6 +175,9 @@ class RerunRecorder:
         self.stream.set_time("step", sequence=rec.step)
         self._log_search(rec)
         log("log", rr.TextLog(f"{rec.action} -> {rec.observation} (r={rec.reward:+.2f})"))
+        if self.manipulation is not None:
+            self.manipulation.log_step(self.pomdp, belief)
+            return
         self._log_world(state, rec.observation)
         if belief is None:
             return
@@ -232,5 +243,62 @@ class RerunRecorder:
             )
 
     def close(self) -> None:
-        """Flush the recording."""
+        """Finish the recording (its footer written: ``rerun rrd verify`` checks it)."""
         self.stream.flush()
+        self.stream.disconnect()
+
+
+class ManipulationLog:
+    """The manipulation tasks' 3D log (module docstring), on ``stream``."""
+
+    def __init__(self, stream: Any) -> None:
+        self.stream = stream
+        self.world_log: Any = None
+        self.t = 0.0
+        self.outcomes = 0
+        self.frames = 0
+
+    def log_step(self, pomdp: Any, belief: ParticleBelief | None) -> None:
+        """Everything new since the last step: the real robot's runs, camera frames and
+        the belief after the update."""
+        from strug_manip.experiments.rerun_manip import WorldLogger, log_camera
+        from strug_manip.world.views import cabinet_cloud
+
+        real = pomdp.real
+        if real is None:
+            return
+        if self.world_log is None:
+            self.world_log = WorldLogger(self.stream, real.world, "world")
+        for out in real.outcomes[self.outcomes :]:
+            self.t = self.world_log.log_replay(out, self.t, every=2)
+        self.outcomes = len(real.outcomes)
+        self.stream.set_time("sim_time", duration=self.t)
+        for frame in real.frames[self.frames :]:
+            log_camera(self.stream, "camera", frame, cabinet_cloud(real.world, frame))
+        self.frames = len(real.frames)
+        if belief is not None and pomdp.worlds is not None:
+            self._log_belief(pomdp, belief)
+
+    def _log_belief(self, pomdp: Any, belief: ParticleBelief) -> None:
+        from strug_manip.experiments.rerun_manip import log_joints
+        from strug_manip.objects.hypotheses import BelievedJoint
+
+        w = pomdp.worlds
+        mass = np.zeros(len(w))
+        for s, wt in zip(belief.states, belief.weights.tolist(), strict=True):
+            mass[s.origin] += wt
+        joints, weights, origins = [], [], []
+        for i in np.flatnonzero(mass):
+            spec, T = w.particles[i].spec, w.pose(int(i))
+            for part in spec.movable_parts:
+                j = BelievedJoint.of_part(part, 0.0, T)
+                joints.append(j)
+                weights.append(mass[i])
+                # A drawer's axis is drawn from its handle (its origin means nothing).
+                at = part.handle_at(0.0, T) if part.joint_type == "prismatic" and \
+                    part.handle_pos is not None else j.origin  # fmt: skip
+                origins.append(at)
+        if joints:
+            log_joints(
+                self.stream, "belief/joints", joints, np.array(weights), origins=np.array(origins)
+            )

@@ -1,4 +1,11 @@
-"""The manipulation domains (Shelf, OpenDrawer, OpenDoor): what the tasks count as
-success and failure from a skill's facts (:mod:`strug_manip.domains.manipulation.rules`)
-and the initial belief from perception (:mod:`strug_manip.domains.manipulation.belief`);
-the POMDPs themselves are still to come."""
+"""The manipulation domains (Shelf, OpenDrawer, OpenDoor): the one package that joins
+the world, the skills, perception and the planners.
+
+- :mod:`.model`: the POMDPs (``ShelfTask``, ``OpenDrawerTask``, ``OpenDoorTask``,
+  registered as ``shelf``, ``opendrawer``, ``opendoor``);
+- :mod:`.state`: states and observations;
+- :mod:`.actions`: the skills as actions, parts named by where they are;
+- :mod:`.worlds`: the particles' compiled worlds and the caches;
+- :mod:`.rules`: what the tasks count as success and failure;
+- :mod:`.belief`: the initial belief from perception.
+"""

@@ -1,0 +1,698 @@
+"""Shelf, OpenDrawer and OpenDoor: a Fetch, a cabinet it has never seen, an object to
+put into it (:class:`ManipulationPOMDP`).
+
+An episode (what :func:`planners.episode.run_episode` does with these domains):
+
+1. ``sample_initial_state``: the real cabinet is generated from a held-out seed
+   (:data:`EPISODE_SEEDS`: no test, tuning or training run uses them) with the task's
+   part kinds; the target is the part at the user's point of the cabinet front, or,
+   without one, drawn among the parts the full robot opens under the true model
+   (Shelf: among the open cells).
+2. ``initial_belief``: the head camera looks from :data:`VIEWS` poses; perception
+   turns those renders into particles (:mod:`.belief`), never reading the true
+   cabinet; their parts are catalogued by where they are (:mod:`.actions`) and the
+   episode's action list made.
+3. ``step`` on a particle runs the skill on that particle's planning twin
+   (:mod:`.worlds`, cached); on the real state it runs the full Fetch with the full
+   skills, planned against the likeliest particle that holds the action's hypothesis,
+   and renders the head camera's point cloud. The belief is updated with that cloud.
+
+Rewards (:mod:`.rules`): +10 and the episode ends when the object rests inside the
+target part (not held); -10 and it ends when the cabinet's base is more than 0.1 m from
+where it stood at the start of the episode; 0 otherwise; at most :data:`MAX_STEPS`
+steps. The discount is 0.95 (one wasted step costs 5 % of the +10, as on the toy
+domains' scale, so the planners prefer short plans without ignoring a probe that
+prevents a -10).
+
+Observations: see :mod:`.state`. Inside a search the twin's outcome determines the
+observation (the status, whether the hand holds something, the handle's motion), so
+simulated observations carry only that key and are weighted by it; real observations
+carry the head camera's cloud as well, weighted by the quantile-Hausdorff likelihood of
+:mod:`perception.likelihood` against each particle's predicted cloud, times the key's
+likelihood.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Hashable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from perception.likelihood import log_likelihood, voxel_thin
+from perception.parts import Perceiver
+from planners.belief import ParticleBelief
+from planners.errors import ConfigError, UnknownNameError, check_positive_int
+from planners.pomdp import ActionSchema, ActionSpace, GenerativePOMDP, Step
+from strug_manip.control import (
+    ControlContext,
+    OpenDoor,
+    OpenDrawer,
+    Outcome,
+    Pick,
+    Place,
+    PullH,
+    PullV,
+    Push,
+    handle_grasps,
+    place_targets,
+)
+from strug_manip.domains.manipulation import belief as belief_mod
+from strug_manip.domains.manipulation.actions import (
+    DEFAULT_PROBES,
+    SKILLS,
+    CataloguePart,
+    ManipAction,
+    action_list,
+    catalogue,
+    describe,
+    part_kind,
+    part_point,
+)
+from strug_manip.domains.manipulation.rules import dragged, inside, open_enough
+from strug_manip.domains.manipulation.state import (
+    NOT_APPLICABLE,
+    REAL,
+    ManipObservation,
+    ManipState,
+    observation_key,
+)
+from strug_manip.domains.manipulation.worlds import ParticleWorlds, Timers
+from strug_manip.objects.generator import CabinetSpec
+from strug_manip.objects.hypotheses import BelievedJoint
+from strug_manip.robot.fetch import GRIPPER_SITE
+from strug_manip.world.scene import SceneConfig
+from strug_manip.world.sim import CameraFrame, ManipulationWorld, WorldState
+from strug_manip.world.views import cabinet_cloud, look_poses, take_views
+
+#: The generator seeds of the episodes' cabinets: ``EPISODE_SEEDS.start + k`` with k
+#: drawn per episode. Tests use seeds below 1,000, the skills' tuning 3,000-3,299, the
+#: evaluations' reports 1,000-2,999, perception's training 100,000 and up.
+EPISODE_SEEDS = range(6_000, 10_000)
+#: Head-camera views perception gets.
+VIEWS = 4
+#: Steps per episode (the paper's).
+MAX_STEPS = 10
+#: Particles drawn from perception (the runner's ``n_particles`` is capped to this:
+#: every particle is a compiled world and a twin).
+MAX_PARTICLES = 24
+#: Likelihood of a simulated observation whose status or holding differs [log].
+MISMATCH = math.log(0.05)
+#: The part kinds of each task's cabinets (the generator's ``kinds``).
+TASK_KINDS: dict[str, tuple[str, ...]] = {
+    "shelf": ("shelf",),
+    "opendrawer": ("drawer",),
+    "opendoor": ("door",),
+}
+
+
+@dataclass
+class RealEpisode:
+    """The real world of the current episode (nothing a planner may read).
+
+    Attributes:
+        world: the scene with the full Fetch.
+        seed: the cabinet's generator seed.
+        target: the target part's link in the true cabinet.
+        point: the point of the cabinet front that names it, world (3,) [m].
+        frames: the head-camera frames taken so far (the initial views, then one per
+            step), for logs.
+        outcomes: the full robot's outcomes, one per step.
+    """
+
+    world: ManipulationWorld
+    seed: int
+    target: str
+    point: np.ndarray
+    frames: list[CameraFrame]
+    outcomes: list[Outcome]
+
+
+class ManipulationPOMDP(GenerativePOMDP):
+    """One manipulation task as a POMDP (module docstring); subclasses name the task.
+
+    Args:
+        cabinet_seed: the real cabinet's generator seed (default: drawn per episode
+            from :data:`EPISODE_SEEDS`).
+        target: the point of the cabinet front naming the target part, world (3,)
+            [m] (the part whose cell contains it, seen from the front); default: drawn
+            per episode (module docstring).
+        particles: belief particles from perception (at most :data:`MAX_PARTICLES`).
+        probes: the probe skills offered per part (``Push``, ``PullV``, ``PullH``).
+        views: head-camera views for perception (1..6).
+        max_steps: the episode's step limit (default the paper's :data:`MAX_STEPS`;
+            fewer for quick checks).
+
+    Raises:
+        ConfigError, UnknownNameError: a bad argument, naming it.
+    """
+
+    task: str = ""
+    discount = 0.95
+    max_steps = MAX_STEPS
+    max_abs_reward = 10.0
+    discrete_observations = False
+
+    def __init__(
+        self,
+        cabinet_seed: int | None = None,
+        target: Sequence[float] | None = None,
+        particles: int = MAX_PARTICLES,
+        probes: Sequence[str] = DEFAULT_PROBES,
+        views: int = VIEWS,
+        max_steps: int = MAX_STEPS,
+    ) -> None:
+        self.max_steps = check_positive_int("max_steps", max_steps)
+        if cabinet_seed is not None:
+            check_positive_int("cabinet_seed", cabinet_seed, allow_zero=True)
+        self.cabinet_seed = cabinet_seed
+        self.target = None if target is None else _point("target", target)
+        self.particles = check_positive_int("particles", particles)
+        for p in probes:
+            if p not in ("Push", "PullV", "PullH"):
+                raise UnknownNameError("probe", p, ["Push", "PullV", "PullH"])
+        self.probes = tuple(probes)
+        if not (isinstance(views, int) and 1 <= views <= 6):
+            raise ConfigError(f"views must be an integer in 1..6, got {views!r}")
+        self.views = views
+        self.ctx = ControlContext()
+        self._perceiver: Perceiver | None = None
+        self.real: RealEpisode | None = None
+        self.worlds: ParticleWorlds | None = None
+        self.parts: tuple[CataloguePart, ...] = ()
+        self.targets: tuple[str | None, ...] = ()
+        self._belief: ParticleBelief | None = None
+        self._space = self._make_space((ManipAction("Pick", grasp="top"),))
+
+    # --- the protocol ----------------------------------------------------------------
+    def action_space(self) -> ActionSpace:
+        """The current episode's actions (before the first belief: Pick alone)."""
+        return self._space
+
+    def discrete_states(self, states: list[Any]) -> bool:
+        return True  # finitely many, compared by value (ManipState)
+
+    def observation_key(self, o: Any) -> Hashable:
+        return o.key
+
+    def check_observation(self, o: Any) -> None:
+        if not isinstance(o, ManipObservation):
+            raise ConfigError(f"{self.name}: expected a ManipObservation, got {o!r}")
+
+    def on_belief(self, belief: ParticleBelief) -> None:
+        """Keep the runner's belief: the real robot plans against its likeliest models."""
+        self._belief = belief
+
+    def sample_initial_state(self, rng: np.random.Generator) -> ManipState:
+        """A new real cabinet and its target (module docstring)."""
+        self.close()
+        t0 = time.perf_counter()
+        seed = self.cabinet_seed
+        if seed is None:
+            seed = EPISODE_SEEDS.start + int(rng.integers(len(EPISODE_SEEDS)))
+        world = ManipulationWorld(
+            SceneConfig(cabinet_seed=seed, cabinet_kinds=TASK_KINDS[self.task])
+        )
+        target, point = self._choose_target(world, rng)
+        world.reset()
+        self.real = RealEpisode(world, seed, target, point, [], [])
+        self.timers = Timers(setup=time.perf_counter() - t0)
+        return ManipState(REAL, world.snapshot(), 0)
+
+    def initial_belief(self, rng: np.random.Generator, n_particles: int) -> ParticleBelief:
+        """Particles from perception on the head camera's views of the real cabinet."""
+        real = self._need_real()
+        t0 = time.perf_counter()
+        frames = take_views(real.world, self.views)
+        real.frames.extend(frames)
+        if self._perceiver is None:
+            self._perceiver = Perceiver()
+        c = real.world.config
+        cfg = belief_mod.BeliefConfig(particles=min(n_particles, self.particles))
+        scene = (c.cabinet_distance, c.cabinet_lateral, c.stand_height)
+        particles = belief_mod.initial_belief(
+            [(f.rgb, f.depth, f.T_world_camera, f.fovy) for f in frames],
+            self._perceiver, rng, cfg, scene=scene,
+        )  # fmt: skip
+        self.timers.perception += time.perf_counter() - t0
+        t0 = time.perf_counter()
+        self.worlds = w = ParticleWorlds(particles, c, self.ctx)
+        poses = [w.pose(i) for i in range(len(w))]
+        self.parts = catalogue(
+            [p.spec for p in particles], [p.q for p in particles], poses, TASK_KINDS[self.task]
+        )
+        self.targets = tuple(self._target_link(i, real.point) for i in range(len(w)))
+        self._space = self._make_space(action_list(self.parts, self.task, self.probes))
+        self.timers.setup += time.perf_counter() - t0
+        belief = ParticleBelief.from_states([ManipState(i, w.initial[i], 0) for i in range(len(w))])
+        self._belief = belief
+        return belief
+
+    def step(self, s: ManipState, a: Hashable, rng: np.random.Generator) -> Step:
+        a = self._check_action(a)
+        if s.origin == REAL:
+            return self._real_step(s, a, rng)
+        w = self._need_worlds()
+        key = (s.origin, s.sim.key, a)
+        hit = w.outcomes.lookup(key)
+        if hit is None:
+            t0 = time.perf_counter()
+            hit = self._simulate(s.origin, s.sim, a)
+            w.timers.twin += time.perf_counter() - t0
+            w.outcomes.store(key, hit)
+        sim, okey, reward, terminal, summary = hit
+        done = terminal or s.t + 1 >= self.max_steps
+        return Step(ManipState(s.origin, sim, s.t + 1, okey),
+                    ManipObservation(okey, None, summary), reward, done)  # fmt: skip
+
+    def obs_loglik(self, o: Any, s_next: Any, a: Hashable) -> float:
+        return float(self.obs_loglik_many(o, [s_next], a)[0])
+
+    def obs_loglik_many(self, o: Any, states: list[Any], a: Hashable) -> np.ndarray:
+        """The key's likelihood per state, times (real observations) the cloud's."""
+        a = self._check_action(a)
+        w = self._need_worlds()
+        out = np.array([self._key_loglik(o.key, s, a) for s in states])
+        if o.cloud is None:
+            return out
+        t0 = time.perf_counter()
+        pose = look_poses(self._need_real().world, 1)[0]
+        clouds = [w.predicted_cloud(s.origin, s.sim, pose) for s in states]
+        t1 = time.perf_counter()
+        # Particles of one model in one cabinet state share a cloud (the same object
+        # from the cache): each distinct cloud is compared once.
+        distinct = {id(c): c for c in clouds if len(c)}
+        ll = dict.fromkeys(distinct, 0.0)
+        if distinct and len(o.cloud):
+            ll = dict(zip(distinct, log_likelihood(o.cloud, list(distinct.values())), strict=True))
+        w.timers.render += t1 - t0
+        w.timers.likelihood += time.perf_counter() - t1
+        # A model whose camera sees no cabinet at all explains no cloud.
+        return out + np.array([ll.get(id(c), -1e3) for c in clouds])
+
+    def plan_for(self, s: Any, rng: np.random.Generator) -> list[Hashable]:
+        """The uncertainty-free plan of particle ``s``: open the target part under each
+        hypothesis in turn (the particle's own first), then Pick and Place; the first
+        that earns the +10 when simulated on ``s`` (a forward search on that particle),
+        else the own hypothesis's. Steps that ``s`` has done already are left out (the
+        part open enough, the object held). Shelf: Pick, then Place."""
+        k = self._target_index(s.origin)
+        if k is None:
+            return []
+        part = self.parts[k]
+        grasp = "top" if self.task == "opendrawer" else "side"
+        tail = [ManipAction("Pick", grasp=grasp), ManipAction("Place", k)]
+        if self._holding(s):
+            tail = tail[1:]
+        if self.task == "shelf" or self._open_enough(s, k):
+            return tail
+        own = part.hypotheses.index(self._own_kind(s.origin, k))
+        first = None
+        for h in [own, *(h for h in range(len(part.hypotheses)) if h != own)]:
+            opening = "OpenDrawer" if part.hypotheses[h] == "drawer" else "OpenDoor"
+            plan = [ManipAction(opening, k, h), *tail]
+            first = first or plan
+            state, ret = s, 0.0
+            for act in plan:
+                state, _, r, done = self.step(state, act, rng)
+                ret += r
+                if done:
+                    break
+            if ret > 0:
+                return plan
+        return first or []
+
+    def format_state(self, s: Any) -> str:
+        who = "real" if s.origin == REAL else f"model {s.origin}"
+        return f"{who}, step {s.t}"
+
+    def format_obs(self, o: Any) -> str:
+        return o.summary or str(o.key)
+
+    def summarize_belief(self, belief: ParticleBelief) -> str:
+        """The target part's hypotheses by weight, and the ESS."""
+        mass: dict[str, float] = {}
+        for s, wt in zip(belief.states, belief.weights.tolist(), strict=True):
+            k = self._target_index(s.origin)
+            kind = "none" if k is None else self._own_kind(s.origin, k)
+            mass[kind] = mass.get(kind, 0.0) + wt
+        top = ", ".join(f"{k} {v:.2f}" for k, v in sorted(mass.items(), key=lambda kv: -kv[1]))
+        return f"target: {top}; ESS {belief.ess():.1f} of {len(belief)}"
+
+    def report(self) -> dict[str, Any]:
+        """Where this episode's time went [s] and the caches' hit rates."""
+        w = self.worlds
+        out: dict[str, Any] = {"time": self.timers.as_dict()}
+        if w is not None:
+            out["time"].update({k: v for k, v in w.timers.as_dict().items() if v})
+            out["outcome_cache"] = {"hits": w.outcomes.hits, "misses": w.outcomes.misses,
+                                    "hit_rate": round(w.outcomes.hit_rate, 3)}  # fmt: skip
+            out["cloud_cache_hit_rate"] = round(w.clouds.hit_rate, 3)
+        return out
+
+    def close(self) -> None:
+        """Free the episode's worlds."""
+        if self.worlds is not None:
+            self.worlds.close()
+        if self.real is not None:
+            self.real.world.close()
+        self.worlds, self.real, self._belief = None, None, None
+
+    # --- set-up --------------------------------------------------------------------------
+    def _make_space(self, actions: tuple[ManipAction, ...]) -> ActionSpace:
+        parts = self.parts
+        return ActionSpace(
+            schemas=tuple(ActionSchema(s) for s in SKILLS),
+            discretized=actions,
+            describe=lambda a: describe(a, parts),
+        )
+
+    def _choose_target(self, world: ManipulationWorld, rng: np.random.Generator):
+        """(link, naming point) of the target part in the true cabinet."""
+        spec = world.scene.cabinet_spec
+        T = world.scene.T_world_cabinet
+        kinds = TASK_KINDS[self.task]
+        if self.target is not None:
+            link = _part_at_point(spec, T, self.target, kinds)
+            if link is None:
+                raise ConfigError(
+                    f"target {np.round(self.target, 3).tolist()} is on no "
+                    f"{'/'.join(kinds)} part of cabinet {world.config.cabinet_seed} "
+                    f"(its cells: {_cells(spec, T, kinds)})"
+                )
+            return link, self.target
+        parts = [p for p in spec.parts if p.kind in kinds and part_point(p, 0.0, T) is not None]
+        for i in rng.permutation(len(parts)):
+            p = parts[i]
+            if p.kind == "shelf" or self._opens(world, p):
+                return p.link, (T @ np.r_[p.cell_center, 1.0])[:3]
+        raise ConfigError(
+            f"cabinet {world.config.cabinet_seed} has no {'/'.join(kinds)} part the robot "
+            "can open; pass another cabinet_seed"
+        )
+
+    def _opens(self, world: ManipulationWorld, part) -> bool:
+        """Whether the full robot opens ``part`` enough for the object under the true
+        model (the target is drawn among such parts)."""
+        T = world.scene.T_world_cabinet
+        joint = BelievedJoint.of_part(part, 0.0, T)
+        opening = OpenDrawer if part.joint_type == "prismatic" else OpenDoor
+        for g in handle_grasps(part, 0.0, T):
+            world.reset()
+            out = opening(g, joint).run(world, ctx=self.ctx)
+            if out.status == "ik_infeasible":
+                continue
+            q = world.part_positions()[world.scene.cabinet_prefix + part.joint]
+            T_now = world.body_pose(world.scene.cabinet_prefix + world.scene.cabinet.root)
+            return (
+                out.ok
+                and not dragged(out.cabinet_displacement)
+                and open_enough(world.scene.cabinet_spec, part.link, q, T_now)
+            )
+        return False
+
+    def _target_link(self, i: int, point: np.ndarray) -> str | None:
+        w = self._need_worlds()
+        return _part_at_point(w.particles[i].spec, w.pose(i), point, TASK_KINDS[self.task])
+
+    # --- simulation ------------------------------------------------------------------------
+    def _simulate(self, i: int, sim: WorldState, a: ManipAction):
+        """``a`` on particle ``i``'s twin from ``sim``: (next sim, observation key,
+        reward, terminal, summary)."""
+        w = self._need_worlds()
+        candidates, plan_world = self._skills(i, a, sim)
+        tw = w.twins[i]
+        tw.restore(sim)
+        before = self._handle(i, a, tw.world)
+        out = None
+        for skill in candidates:
+            tw.restore(sim)
+            out = _attempt(lambda sk=skill: sk.simulate(tw, plan_world=plan_world))
+            if out is not None and out.status != "ik_infeasible":
+                break
+        if out is None:
+            return sim, observation_key(NOT_APPLICABLE, self._holds(tw.world), np.zeros(3)), \
+                0.0, False, f"{a.skill}: {NOT_APPLICABLE}"  # fmt: skip
+        motion = self._handle(i, a, tw.world) - before
+        reward = self._reward(w.particles[i].spec, self.targets[i], tw.world, out)
+        return (tw.snapshot(), observation_key(out.status, out.holding, motion), reward,
+                reward != 0.0, out.summary())  # fmt: skip
+
+    def _skills(self, i: int, a: ManipAction, sim: WorldState):
+        """The skills to try in turn (each next grasp or placement while the previous is
+        ``ik_infeasible``) and the planning world, for ``a`` on particle ``i`` in ``sim``
+        (on the real robot: ``i`` is the likeliest model, ``sim`` its state)."""
+        w = self._need_worlds()
+        if a.skill == "Pick":
+            # The object's table is far from the cabinet: one planning world serves
+            # every model, so the base placement is found once for all of them.
+            return [Pick("object", a.grasp)], w.fetch(0)
+        part = self.parts[a.part]
+        if a.skill == "Place":
+            link = part.links[i]
+            if link is None:
+                return [], None
+            tw = w.twins[i]
+            tw.restore(sim)
+            world = tw.world
+            q = world.part_positions().get(world.scene.cabinet_prefix + _joint(w, i, link), 0.0)
+            T_now = world.body_pose(world.scene.cabinet_prefix + world.scene.cabinet.root)
+            try:
+                tgts = place_targets(w.particles[i].spec, link, q, T_now)
+            except ConfigError:
+                return [], None  # the part is not open enough: no pose to place at
+            return [Place("object", t.p, t.lift) for t in tgts], None
+        h = max(a.hypothesis, 0)
+        holder = part.holders[h]
+        spec_part = w.particles[holder].spec.part(part.links[holder])
+        q = w.particles[holder].q.get(spec_part.joint, 0.0)
+        T = w.pose(holder)
+        grasps = handle_grasps(spec_part, q, T)
+        plan_world = w.fetch(holder, self._best_state(holder))
+        if a.skill in ("OpenDrawer", "OpenDoor"):
+            joint = BelievedJoint.of_part(spec_part, q, T)
+            cls = OpenDrawer if a.skill == "OpenDrawer" else OpenDoor
+            return [cls(g, joint) for g in grasps], plan_world
+        probe = {"Push": Push, "PullV": PullV, "PullH": PullH}[a.skill]
+        return [probe(g) for g in grasps], plan_world
+
+    def _handle(self, i: int, a: ManipAction, world: ManipulationWorld) -> np.ndarray:
+        """Where the acted part's handle (or the object, for Pick and Place) is in
+        ``world`` (particle ``i``'s twin, or the real world for ``i`` = REAL), (3,)."""
+        if a.skill in ("Pick", "Place"):
+            return world.object_pose()[:3, 3].copy()
+        spec = world.scene.cabinet_spec
+        T = world.body_pose(world.scene.cabinet_prefix + world.scene.cabinet.root)
+        qs = world.part_positions()
+        if i == REAL:
+            ref = self.parts[a.part].point
+            pts = [(p, part_point(p, qs[world.scene.cabinet_prefix + p.joint], T))
+                   for p in spec.movable_parts]  # fmt: skip
+            pts = [(p, x) for p, x in pts if x is not None]
+            if not pts:
+                return np.zeros(3)
+            return min(pts, key=lambda px: np.linalg.norm(px[1] - ref))[1]
+        link = self.parts[a.part].links[i]
+        if link is None:
+            return np.zeros(3)
+        p = spec.part(link)
+        pt = part_point(p, qs.get(world.scene.cabinet_prefix + p.joint, 0.0), T)
+        return np.zeros(3) if pt is None else pt
+
+    def _reward(self, spec: CabinetSpec, target: str | None, world, out: Outcome) -> float:
+        if dragged(out.cabinet_displacement):
+            return -10.0
+        if target is None or out.holding:
+            return 0.0
+        q = world.part_positions().get(world.scene.cabinet_prefix + spec.part(target).joint, 0.0)
+        T_now = world.body_pose(world.scene.cabinet_prefix + world.scene.cabinet.root)
+        return 10.0 if inside(spec, target, q, T_now, world.object_pose()) else 0.0
+
+    def _key_loglik(self, key: tuple[float, ...], s: ManipState, a: ManipAction) -> float:
+        """How likely particle state ``s`` (after ``a``) makes an observation with
+        ``key``: a mismatched status or grip costs :data:`MISMATCH` each; the handle's
+        motion is Gaussian with one bin's standard deviation per axis."""
+        mine = s.last
+        if not mine:
+            return 0.0
+        ll = MISMATCH * ((key[0] != mine[0]) + (key[1] != mine[1]))
+        d = np.subtract(key[2:], mine[2:])
+        return float(ll - 0.5 * d @ d)
+
+    # --- the real robot ------------------------------------------------------------------
+    def _real_step(self, s: ManipState, a: ManipAction, rng: np.random.Generator) -> Step:
+        real = self._need_real()
+        t0 = time.perf_counter()
+        world = real.world
+        world.restore(s.sim)
+        i, state = self._likeliest(a)
+        candidates, plan_world = self._skills(i, a, state)
+        if plan_world is None:
+            plan_world = self._need_worlds().fetch(i, state)
+        before = self._handle(REAL, a, world)
+        out, seed = None, int(rng.integers(2**31))
+        for skill in candidates:
+            out = _attempt(lambda sk=skill: sk.run(world, ctx=self.ctx, plan_world=plan_world,
+                                                   seed=seed))  # fmt: skip
+            if out is not None and out.status != "ik_infeasible":
+                break
+        if out is None:
+            status, holding, motion, reward, summary = NOT_APPLICABLE, False, np.zeros(3), 0.0, \
+                f"{a.skill}: {NOT_APPLICABLE} under the likeliest model"  # fmt: skip
+        else:
+            real.outcomes.append(out)
+            status, holding, summary = out.status, out.holding, out.summary()
+            motion = self._handle(REAL, a, world) - before
+            reward = self._reward(world.scene.cabinet_spec, real.target, world, out)
+        frame = take_views(world, 1)[0]
+        real.frames.append(frame)
+        cloud = voxel_thin(cabinet_cloud(world, frame))
+        self.timers.real += time.perf_counter() - t0
+        obs = ManipObservation(observation_key(status, holding, motion), cloud, summary)
+        done = reward != 0.0 or s.t + 1 >= self.max_steps
+        return Step(ManipState(REAL, world.snapshot(), s.t + 1, obs.key), obs, reward, done)
+
+    def _likeliest(self, a: ManipAction) -> tuple[int, WorldState]:
+        """The model the real robot plans ``a`` against, and its state: for an opening
+        or a probe, the hypothesis's holder (in its likeliest current state); for Pick
+        and Place, the likeliest particle that has the action's part."""
+        w = self._need_worlds()
+        if a.skill not in ("Pick", "Place"):
+            holder = self.parts[a.part].holders[max(a.hypothesis, 0)]
+            return holder, self._best_state(holder) or w.initial[holder]
+        b = self._belief
+        if b is None:
+            return 0, w.initial[0]
+        order = np.argsort(-b.weights, kind="stable")
+        for j in order:
+            s = b.states[j]
+            if a.skill == "Pick" or self.parts[a.part].links[s.origin] is not None:
+                return s.origin, s.sim
+        s = b.states[int(order[0])]
+        return s.origin, s.sim
+
+    def _best_state(self, origin: int) -> WorldState | None:
+        b = self._belief
+        if b is None:
+            return None
+        best = None
+        for s, wt in zip(b.states, b.weights.tolist(), strict=True):
+            if s.origin == origin and (best is None or wt > best[0]):
+                best = (wt, s.sim)
+        return None if best is None else best[1]
+
+    # --- small queries -------------------------------------------------------------------
+    def _target_index(self, origin: int) -> int | None:
+        link = self.targets[origin] if 0 <= origin < len(self.targets) else None
+        if link is None:
+            return None
+        for k, part in enumerate(self.parts):
+            if part.links[origin] == link:
+                return k
+        return None
+
+    def _own_kind(self, origin: int, k: int) -> str:
+        w = self._need_worlds()
+        return part_kind(w.particles[origin].spec.part(self.parts[k].links[origin]))
+
+    def _holding(self, s: ManipState) -> bool:
+        tw = self._need_worlds().twins[s.origin]
+        tw.restore(s.sim)
+        return self._holds(tw.world)
+
+    @staticmethod
+    def _holds(world: ManipulationWorld) -> bool:
+        """The object is in the hand (as :class:`Place` tells: within 0.1 m of the TCP)."""
+        tcp = world.site_pose(GRIPPER_SITE)[:3, 3]
+        return bool(np.linalg.norm(tcp - world.object_pose()[:3, 3]) < 0.1)
+
+    def _open_enough(self, s: ManipState, k: int) -> bool:
+        w = self._need_worlds()
+        link = self.parts[k].links[s.origin]
+        tw = w.twins[s.origin]
+        tw.restore(s.sim)
+        world = tw.world
+        q = world.part_positions().get(world.scene.cabinet_prefix + _joint(w, s.origin, link), 0)
+        T_now = world.body_pose(world.scene.cabinet_prefix + world.scene.cabinet.root)
+        return open_enough(w.particles[s.origin].spec, link, q, T_now)
+
+    def _check_action(self, a: Hashable) -> ManipAction:
+        if not isinstance(a, ManipAction) or a not in self._space.discretized:
+            raise UnknownNameError(
+                "action", str(a), [self._space.name(x) for x in self._space.discretized]
+            )
+        return a
+
+    def _need_real(self) -> RealEpisode:
+        if self.real is None:
+            raise ConfigError(f"{self.name}: no episode yet (call sample_initial_state first)")
+        return self.real
+
+    def _need_worlds(self) -> ParticleWorlds:
+        if self.worlds is None:
+            raise ConfigError(f"{self.name}: no belief yet (call initial_belief first)")
+        return self.worlds
+
+
+def _attempt(run) -> Outcome | None:
+    """``run()``, or None when the skill cannot be planned in this model (its plan
+    raises: no handle at the grasp, no travel left, nothing held to place)."""
+    try:
+        return run()
+    except (ConfigError, UnknownNameError):
+        return None
+
+
+def _joint(w: ParticleWorlds, i: int, link: str) -> str:
+    return w.particles[i].spec.part(link).joint
+
+
+def _point(name: str, v: Sequence[float]) -> np.ndarray:
+    arr = np.asarray(v, dtype=float).reshape(-1)
+    if arr.shape != (3,) or not np.all(np.isfinite(arr)):
+        raise ConfigError(f"{name} must be a finite world point (x, y, z) [m], got {v!r}")
+    return arr
+
+
+def _part_at_point(
+    spec: CabinetSpec, T: np.ndarray, point: np.ndarray, kinds: tuple[str, ...]
+) -> str | None:
+    """The part of ``kinds`` whose front cell contains ``point`` seen from the front
+    (the cabinet frame's y, z), or None."""
+    c = (np.linalg.inv(T) @ np.r_[point, 1.0])[:3]
+    for p in spec.parts:
+        if p.kind not in kinds:
+            continue
+        half = np.asarray(p.cell_size) / 2
+        if abs(c[1] - p.cell_center[1]) <= half[0] and abs(c[2] - p.cell_center[2]) <= half[1]:
+            return p.link
+    return None
+
+
+def _cells(spec: CabinetSpec, T: np.ndarray, kinds: tuple[str, ...]) -> list[list[float]]:
+    return [np.round((T @ np.r_[p.cell_center, 1.0])[:3], 3).tolist()
+            for p in spec.parts if p.kind in kinds]  # fmt: skip
+
+
+class ShelfTask(ManipulationPOMDP):
+    """The object goes onto an open shelf cell: no uncertainty needs reducing."""
+
+    name = "shelf"
+    task = "shelf"
+
+
+class OpenDrawerTask(ManipulationPOMDP):
+    """Only drawers; the object goes into the target drawer."""
+
+    name = "opendrawer"
+    task = "opendrawer"
+
+
+class OpenDoorTask(ManipulationPOMDP):
+    """Only doors and flaps; the object goes behind the target door."""
+
+    name = "opendoor"
+    task = "opendoor"

@@ -1,0 +1,115 @@
+"""The manipulation tasks as POMDPs: bad input, the initial belief, the solver contract
+and determinism (cabinet seeds below 1,000: the episodes' own seeds are held out)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from planners.errors import ConfigError, UnknownNameError
+from planners.solvers import SOLVERS, make_solver
+from strug_manip.domains import MANIPULATION_DOMAINS, make_domain
+from strug_manip.domains.manipulation.actions import ManipAction, part_kind
+from strug_manip.domains.manipulation.state import ManipObservation
+from strug_manip.experiments.episode import run_episode
+from strug_manip.objects.hypotheses import model_of
+
+#: A drawers-only cabinet whose top drawer the robot opens (``tools/eval_skills.py``).
+SEED = 11
+
+
+def _top_point(domain) -> np.ndarray:
+    """The world point of the true cabinet's first part of the task's kind."""
+    real = domain.real
+    T = real.world.scene.T_world_cabinet
+    part = next(p for p in real.world.scene.cabinet_spec.parts if p.link == real.target)
+    return (T @ np.r_[part.cell_center, 1.0])[:3]
+
+
+def test_bad_input_gets_one_clear_error():
+    with pytest.raises(UnknownNameError, match="probe"):
+        make_domain("opendrawer", probes=("Shake",))
+    with pytest.raises(ConfigError, match="views"):
+        make_domain("opendrawer", views=9)
+    with pytest.raises(ConfigError, match="target"):
+        make_domain("opendrawer", target=(1.0, 2.0))
+    d = make_domain("opendrawer", cabinet_seed=SEED, target=(0.0, 5.0, 9.0))
+    with pytest.raises(ConfigError, match=r"is on no drawer part of cabinet 11 \(its cells"):
+        d.sample_initial_state(np.random.default_rng(0))
+    with pytest.raises(ConfigError, match="no episode yet"):
+        make_domain("opendoor").initial_belief(np.random.default_rng(0), 4)
+
+
+@pytest.fixture(scope="module")
+def drawer_episode():
+    """An OpenDrawer episode's domain after its initial belief (target given: no
+    full-robot check of the target)."""
+    probe = make_domain("opendrawer", cabinet_seed=SEED, particles=8)
+    probe.sample_initial_state(np.random.default_rng(0))
+    point = _top_point(probe)
+    probe.close()
+    d = make_domain("opendrawer", cabinet_seed=SEED, particles=8, target=tuple(point))
+    s0 = d.sample_initial_state(np.random.default_rng(0))
+    belief = d.initial_belief(np.random.default_rng(1), 8)
+    yield d, s0, belief
+    d.close()
+
+
+def test_initial_belief_holds_the_true_target_model(drawer_episode):
+    d, _, belief = drawer_episode
+    spec = d.real.world.scene.cabinet_spec
+    true = model_of(spec.part(d.real.target))
+    held = {
+        part_kind(d.worlds.particles[s.origin].spec.part(d.targets[s.origin]))
+        for s in belief.states
+        if d.targets[s.origin] is not None
+    }
+    assert true in held, f"the target is a {true}; the particles hold {held}"
+
+
+def test_unknown_actions_are_refused_and_steps_are_cached(drawer_episode):
+    d, _, belief = drawer_episode
+    rng = np.random.default_rng(0)
+    with pytest.raises(UnknownNameError, match="action"):
+        d.step(belief.states[0], ManipAction("Fly", 0), rng)
+    with pytest.raises(UnknownNameError, match="action"):
+        d.step(belief.states[0], ManipAction("Place", 99), rng)
+    a = ManipAction("Pick", grasp="top")
+    s = belief.states[0]
+    first = d.step(s, a, rng)
+    hits = d.worlds.outcomes.hits
+    again = d.step(s, a, rng)
+    assert d.worlds.outcomes.hits == hits + 1
+    assert first.state == again.state and first.obs.key == again.obs.key
+    assert isinstance(first.obs, ManipObservation) and first.obs.cloud is None
+
+
+def _record(domain: str, solver: str, seed: int, **kw) -> list[tuple]:
+    d = make_domain(domain, cabinet_seed=SEED if domain == "opendrawer" else 12, **kw)
+    cfg = make_solver(solver, {"sims": 2, "particles": 4} if solver in ("strug", "entropy",
+                      "active") else {"sims": 2})  # fmt: skip
+    try:
+        res = run_episode(d, cfg, seed, n_particles=6)
+    finally:
+        d.close()
+    return [(r.action, r.observation, r.reward) for r in res.steps]
+
+
+@pytest.mark.parametrize("solver", list(SOLVERS))
+def test_every_solver_runs_an_opendrawer_episode(solver):
+    steps = _record("opendrawer", solver, 0, particles=6, max_steps=1)
+    assert len(steps) == 1
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("domain", list(MANIPULATION_DOMAINS))
+@pytest.mark.parametrize("solver", list(SOLVERS))
+def test_every_solver_runs_every_manipulation_domain(domain, solver):
+    steps = _record(domain, solver, 0, particles=6, max_steps=2)
+    assert 1 <= len(steps) <= 2
+
+
+def test_the_same_seed_gives_the_same_episode():
+    a = _record("opendrawer", "random", 3, particles=6, max_steps=2)
+    b = _record("opendrawer", "random", 3, particles=6, max_steps=2)
+    assert a == b
