@@ -126,6 +126,8 @@ def run_task(task: tuple[str, str, int], overrides: dict[str, Any], n_particles:
     return rec
 
 
+#: The fields of a record that measure wall time (they differ between equal runs).
+TIMING_FIELDS = ("seconds", "plan_seconds_median", "report")
 #: The fields every line of ``results.jsonl`` has.
 RECORD_FIELDS = ("domain", "solver", "seed", "return")
 

@@ -185,6 +185,7 @@ class ManipulationPOMDP(GenerativePOMDP):
         self.parts: tuple[CataloguePart, ...] = ()
         self.targets: tuple[str | None, ...] = ()
         self._belief: ParticleBelief | None = None
+        self.timers = Timers()
         self._space = self._make_space((ManipAction("Pick", grasp="top"),))
 
     # --- the protocol ----------------------------------------------------------------
