@@ -3,7 +3,8 @@ planner, and the world stepping (:func:`run_episode`).
 
 The loop: draw the true initial state and an ``n_particles`` belief from b0; then, per
 step, ``planner.act(belief, rng)``, step the true state with the chosen action, update
-the belief with the real observation (:func:`planners.belief.update_belief`) and report
+the belief with the real observation (:func:`planners.belief.update_belief`), condition it on what
+the domain knows for certain (``pomdp.condition``) and report
 the step to the planner (``observe``), until ``done`` or the domain's ``max_steps``.
 
 Randomness: ``seed`` feeds one ``SeedSequence`` split into three independent
@@ -138,8 +139,7 @@ def run_episode(
     world_rng, belief_rng, plan_rng = episode_generators(seed)
     t0 = time.perf_counter()
     state = pomdp.sample_initial_state(world_rng)
-    belief = pomdp.initial_belief(belief_rng, n_particles)
-    pomdp.on_belief(belief)
+    belief = pomdp.condition(pomdp.initial_belief(belief_rng, n_particles))
     planner = solver.planner(pomdp)
     observe = getattr(planner, "observe", None)
     names = pomdp.action_space().name
@@ -154,7 +154,7 @@ def run_episode(
         disc *= pomdp.discount
         if not done:
             belief, _ = update_belief(pomdp, belief, action, obs, belief_rng)
-            pomdp.on_belief(belief)
+            belief = pomdp.condition(belief)
             if observe is not None:
                 observe(action, obs)  # lets a planner keep its tree (reuse_tree)
         rec = StepRecord(

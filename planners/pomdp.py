@@ -342,11 +342,14 @@ class GenerativePOMDP(ABC):
         """
         return None
 
-    def on_belief(self, belief: ParticleBelief) -> None:
-        """Told the runner's belief after it is made and after every update (default:
-        nothing). A domain whose real world needs the belief to act (the manipulation
-        tasks plan the real robot's skills against the likeliest models) keeps it."""
-        return None
+    def condition(self, belief: ParticleBelief) -> ParticleBelief:
+        """The runner's belief, after it is made and after every update, given what the
+        domain knows for certain of the real state (default: ``belief`` unchanged).
+
+        The manipulation tasks put the robot's and the cabinet's known poses into every
+        particle here, and keep the belief: their real robot plans against its
+        likeliest models."""
+        return belief
 
     def rollout_policy(self) -> RolloutPolicy | None:
         """The domain's rollout heuristic (``rollout="heuristic"`` in the tree solvers).

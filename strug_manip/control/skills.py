@@ -75,6 +75,9 @@ OBJECTS: tuple[str, ...] = ("object",)
 HANDLE_RADIUS = 0.05
 #: The carcass link of the generated cabinets (PartNet's ``link_0``).
 CARCASS = "link_0"
+#: The object is held when its centre is this close to the TCP [m] (the box's half
+#: diagonal is 0.06 m; a dropped object lies 0.2 m or more away).
+HELD_RADIUS = 0.1
 #: Grasps of :class:`Pick`.
 GRASPS: tuple[str, ...] = ("top", "side")
 
@@ -428,6 +431,15 @@ def object_grasp(T_world_object: np.ndarray, grasp: str, toward: np.ndarray) -> 
     return T
 
 
+def holds_object(world: ManipulationWorld) -> bool:
+    """The object is in the hand: its centre within :data:`HELD_RADIUS` of the TCP (the
+    full Fetch's or the twin's hand alike)."""
+    from strug_manip.robot.fetch import GRIPPER_SITE
+
+    tcp = world.site_pose(GRIPPER_SITE)[:3, 3]
+    return bool(np.linalg.norm(tcp - world.object_pose()[:3, 3]) <= HELD_RADIUS)
+
+
 @dataclass(frozen=True)
 class Pick(Skill):
     """Pick the object ``o`` where it lies and lift it; the robot then carries it.
@@ -484,9 +496,9 @@ class Place(Skill):
         p = check_pose("p (T_world_object)", self.p)
         from strug_manip.robot.fetch import GRIPPER_SITE
 
-        T_wg, T_wo = world.site_pose(GRIPPER_SITE), world.object_pose()
-        if np.linalg.norm(T_wg[:3, 3] - T_wo[:3, 3]) > 0.1:
+        if not holds_object(world):
             raise ConfigError(f"Place needs {self.o!r} in the gripper; it is not held")
+        T_wg, T_wo = world.site_pose(GRIPPER_SITE), world.object_pose()
         T_go = np.linalg.inv(T_wg) @ T_wo
         g = p @ np.linalg.inv(T_go)
         g[2, 3] += params.place_drop

@@ -49,6 +49,11 @@ MANIPULATION_DOMAINS: dict[str, Callable[..., GenerativePOMDP]] = {
 #: Simulations per decision on the manipulation tasks when none are asked for (CLI and
 #: bench): each costs a twin's skill (tens of ms) where a toy domain's costs microseconds.
 MANIPULATION_SIMS = 20
+#: Root particles M of STRUG's compatibility matrix and of Entropy Regularized's and
+#: Active Learning's estimates on the manipulation tasks when none are asked for: each
+#: particle's plan pays its own Place placement search (about 0.2-0.4 s cold), and the
+#: belief holds at most 24 models.
+MANIPULATION_PARTICLES = 12
 #: Canonical domain name -> constructor, in the column order of the paper's Table I.
 DOMAINS: dict[str, Callable[..., GenerativePOMDP]] = {**TOY_DOMAINS, **MANIPULATION_DOMAINS}
 
@@ -108,6 +113,7 @@ __all__ = [
     "DOMAINS",
     "DOMAIN_SUMMARIES",
     "MANIPULATION_DOMAINS",
+    "MANIPULATION_PARTICLES",
     "MANIPULATION_SIMS",
     "TOY_DOMAINS",
     "ExtendedTiger",

@@ -23,7 +23,13 @@ from typing import Any
 
 from planners.errors import ConfigError, UnknownNameError, check_positive_int
 from planners.solvers import SOLVERS, make_solver
-from strug_manip.domains import MANIPULATION_DOMAINS, MANIPULATION_SIMS, domain_class, make_domain
+from strug_manip.domains import (
+    MANIPULATION_DOMAINS,
+    MANIPULATION_PARTICLES,
+    MANIPULATION_SIMS,
+    domain_class,
+    make_domain,
+)
 from strug_manip.experiments.episode import DEFAULT_PARTICLES, run_episode
 from strug_manip.experiments.executors import EXECUTORS, run_local, run_ray
 from strug_manip.experiments.table import summarize, to_markdown, write_csv, write_png
@@ -86,13 +92,17 @@ def solver_config(solver: str, overrides: dict[str, Any]) -> Any:
 
 
 def budget_for(domain: str, overrides: dict[str, Any]) -> dict[str, Any]:
-    """``overrides`` with the manipulation tasks' default budget
-    (:data:`~strug_manip.domains.MANIPULATION_SIMS` simulations per decision) where
-    they set none: the solvers' 3000 are sized for the toy domains, whose steps cost
-    microseconds, not the tens of milliseconds of a twin's skill."""
-    if domain in MANIPULATION_DOMAINS and "sims" not in overrides and "time_limit" not in overrides:
-        return {**overrides, "sims": MANIPULATION_SIMS}
-    return overrides
+    """``overrides`` with the manipulation tasks' default budget where they set none:
+    :data:`~strug_manip.domains.MANIPULATION_SIMS` simulations per decision (the
+    solvers' 3000 are sized for the toy domains, whose steps cost microseconds, not the
+    tens of milliseconds of a twin's skill) and
+    :data:`~strug_manip.domains.MANIPULATION_PARTICLES` root particles."""
+    if domain not in MANIPULATION_DOMAINS:
+        return overrides
+    out = {"particles": MANIPULATION_PARTICLES, **overrides}
+    if "sims" not in overrides and "time_limit" not in overrides:
+        out["sims"] = MANIPULATION_SIMS
+    return out
 
 
 def run_task(task: tuple[str, str, int], overrides: dict[str, Any], n_particles: int) -> dict:

@@ -49,7 +49,15 @@ from perception.inputs import View, check_view
 from perception.parts import Perceiver
 from planners.errors import ConfigError, check_positive_int
 from strug_manip.objects import generator as gen
-from strug_manip.objects.assembly import FRONT, GAP, CabinetModel, PartModel, assemble
+from strug_manip.objects.assembly import (
+    FRONT,
+    GAP,
+    SHELF_BOARD,
+    WALL,
+    CabinetModel,
+    PartModel,
+    assemble,
+)
 from strug_manip.objects.generator import CabinetSpec, axis_angle
 
 #: Opening axis of a door hinged on each side, front frame (the generator's e x n).
@@ -359,6 +367,73 @@ def sample_particles(
         order = sorted(range(len(parts)), key=lambda i: (-parts[i].rect[3], parts[i].rect[0]))
         out.append(Particle(model, spec, q, tuple(source[i] for i in order), run))
     return out
+
+
+#: Where the open cell's walls are read from: points this far behind the front plane
+#: [m] (the boards' front edges and the walls just inside the opening; deeper, the back
+#: panel would pass for a wall).
+CELL_BAND = (0.02, 0.12)
+#: Half-width of the column above and below the point where boards are looked for [m].
+CELL_COLUMN = 0.04
+
+
+def open_cell(model: CabinetModel, point: np.ndarray, clouds: Sequence[np.ndarray]) -> PartModel:
+    """The open shelf cell at world ``point`` (3,) [m], from the cabinet's points the
+    head camera saw (``clouds``: world (N, 3) [m], e.g.
+    :func:`~strug_manip.world.views.cabinet_cloud` of the views perception had).
+
+    The network finds movable parts only; an open cell is empty space between boards.
+    Just inside the opening (:data:`CELL_BAND`), the highest surface below ``point``
+    is the cell's floor (a board's top), the lowest above it its ceiling (at most the
+    model's carcass top), and the
+    nearest surfaces left and right of it at mid-height its walls; where none is seen
+    the carcass (``model``'s outer size less a board) bounds the cell.
+    """
+    T = np.linalg.inv(np.asarray(model.T_world_front, dtype=float))
+    P = np.concatenate([np.asarray(c, dtype=float).reshape(-1, 3) for c in clouds])
+    P = P @ T[:3, :3].T + T[:3, 3]
+    _, yt, zt = T[:3, :3] @ np.asarray(point, dtype=float) + T[:3, 3]
+    inside = (P[:, 0] < -CELL_BAND[0]) & (P[:, 0] > -CELL_BAND[1])
+    col = inside & (np.abs(P[:, 1] - yt) < CELL_COLUMN)
+    below, above = P[col & (P[:, 2] < zt - 0.01), 2], P[col & (P[:, 2] > zt + 0.01), 2]
+    floor = below.max() if len(below) else WALL
+    # Never above the carcass's top board as the model has it (a cell whose opening
+    # reached into that board would let the object be carried in through it).
+    ceiling = min(above.min() if len(above) else np.inf, model.height - WALL)
+    band = inside & (P[:, 2] > floor + 0.02) & (P[:, 2] < ceiling - 0.02)
+    right, left = P[band & (P[:, 1] > yt + 0.02), 1], P[band & (P[:, 1] < yt - 0.02), 1]
+    y1 = right.min() if len(right) else model.width / 2 - WALL
+    y0 = left.max() if len(left) else -model.width / 2 + WALL
+    z0 = floor - SHELF_BOARD  # the cell's board, with its top where the floor was seen
+    return PartModel("shelf", (float(y0), float(y1), float(z0), float(ceiling)),
+                     np.zeros(3), np.zeros(3))  # fmt: skip
+
+
+def with_open_cell(
+    particle: Particle,
+    point: np.ndarray,
+    clouds: Sequence[np.ndarray],
+    scene: tuple[float, float, float] = (1.0, 0.0, 0.5),
+) -> Particle:
+    """``particle`` with the open cell at ``point`` (:func:`open_cell`) added, unless
+    one of its parts covers the point already (it then believes something is there)."""
+    m = particle.model
+    T = np.linalg.inv(np.asarray(m.T_world_front, dtype=float))
+    _, y, z = T[:3, :3] @ np.asarray(point, dtype=float) + T[:3, 3]
+    if any(p.rect[0] <= y <= p.rect[1] and p.rect[2] <= z <= p.rect[3] for p in m.parts):
+        return particle
+    cell = open_cell(m, point, clouds)
+    if any(_overlaps(cell.rect, o.rect) for o in m.parts):
+        return particle
+    parts = (*m.parts, cell)
+    model = dataclasses.replace(m, parts=parts)
+    spec, q = assemble(model, *scene)
+    # Per part of the spec (top to bottom, left to right), the fused hypothesis it
+    # came from: -1 for the cell, which no hypothesis holds.
+    source = dict(zip(sorted(range(len(m.parts)), key=lambda i: (-m.parts[i].rect[3],
+                  m.parts[i].rect[0])), particle.source, strict=True))  # fmt: skip
+    order = sorted(range(len(parts)), key=lambda i: (-parts[i].rect[3], parts[i].rect[0]))
+    return Particle(model, spec, q, tuple(source.get(i, -1) for i in order), particle.run)
 
 
 def perceive_cabinet(

@@ -60,6 +60,7 @@ from strug_manip.control import (
     handle_grasps,
     place_targets,
 )
+from strug_manip.control.skills import holds_object
 from strug_manip.domains.manipulation import belief as belief_mod
 from strug_manip.domains.manipulation.actions import (
     DEFAULT_PROBES,
@@ -83,9 +84,9 @@ from strug_manip.domains.manipulation.state import (
 from strug_manip.domains.manipulation.worlds import ParticleWorlds, Timers
 from strug_manip.objects.generator import CabinetSpec
 from strug_manip.objects.hypotheses import BelievedJoint
-from strug_manip.robot.fetch import GRIPPER_SITE
+from strug_manip.robot.fetch import BASE_JOINTS
 from strug_manip.world.scene import SceneConfig
-from strug_manip.world.sim import CameraFrame, ManipulationWorld, WorldState
+from strug_manip.world.sim import OBJECT_JOINT, CameraFrame, ManipulationWorld, WorldState
 from strug_manip.world.views import cabinet_cloud, look_poses, take_views
 
 #: The generator seeds of the episodes' cabinets: ``EPISODE_SEEDS.start + k`` with k
@@ -203,9 +204,37 @@ class ManipulationPOMDP(GenerativePOMDP):
         if not isinstance(o, ManipObservation):
             raise ConfigError(f"{self.name}: expected a ManipObservation, got {o!r}")
 
-    def on_belief(self, belief: ParticleBelief) -> None:
-        """Keep the runner's belief: the real robot plans against its likeliest models."""
-        self._belief = belief
+    def condition(self, belief: ParticleBelief) -> ParticleBelief:
+        """The belief given what the robot knows for certain after a real step, and kept:
+        the real robot plans against its likeliest models.
+
+        Known in every particle alike: where the robot's base stands (its odometry),
+        where the cabinet's base stands (the carcass, which the head camera's cloud
+        shows to millimetres; taken from the simulator as a perfect localisation) and,
+        when the hand is empty, where the object rests (it is tracked as well). Each
+        particle keeps its own parts' joints and, when the real hand holds the object,
+        its own idea of the grasp. Without this a cabinet the real robot dragged by 5 cm
+        stays put in every particle, and the next Place aims 5 cm off.
+        """
+        real, w = self.real, self.worlds
+        if real is None or w is None or all(s.t == 0 for s in belief.states):
+            self._belief = belief
+            return belief
+        rw = real.world
+        base = np.array([rw.robot_qpos()[j] for j in BASE_JOINTS])
+        known = [rw.scene.cabinet_prefix + "free", *(() if holds_object(rw) else (OBJECT_JOINT,))]
+        done: dict[ManipState, ManipState] = {}
+        states = []
+        for s in belief.states:
+            if s not in done:
+                tw = w.twins[s.origin]
+                tw.restore(s.sim)
+                tw.world.copy_joints(rw, known)
+                tw.set_robot_base(base)
+                done[s] = ManipState(s.origin, tw.snapshot(), s.t, s.last)
+            states.append(done[s])
+        self._belief = ParticleBelief(states, belief.weights, belief.origin)
+        return self._belief
 
     def sample_initial_state(self, rng: np.random.Generator) -> ManipState:
         """A new real cabinet and its target (module docstring)."""
@@ -238,6 +267,10 @@ class ManipulationPOMDP(GenerativePOMDP):
             [(f.rgb, f.depth, f.T_world_camera, f.fovy) for f in frames],
             self._perceiver, rng, cfg, scene=scene,
         )  # fmt: skip
+        if self.task == "shelf":  # the network finds no open cells: read them off the cloud
+            clouds = [cabinet_cloud(real.world, f) for f in frames]
+            particles = [belief_mod.with_open_cell(p, real.point, clouds, scene)
+                         for p in particles]  # fmt: skip
         self.timers.perception += time.perf_counter() - t0
         t0 = time.perf_counter()
         self.worlds = w = ParticleWorlds(particles, c, self.ctx)
@@ -388,7 +421,7 @@ class ManipulationPOMDP(GenerativePOMDP):
         parts = [p for p in spec.parts if p.kind in kinds and part_point(p, 0.0, T) is not None]
         for i in rng.permutation(len(parts)):
             p = parts[i]
-            if p.kind == "shelf" or self._opens(world, p):
+            if self._fills(world, p) if p.kind == "shelf" else self._opens(world, p):
                 return p.link, (T @ np.r_[p.cell_center, 1.0])[:3]
         raise ConfigError(
             f"cabinet {world.config.cabinet_seed} has no {'/'.join(kinds)} part the robot "
@@ -415,6 +448,26 @@ class ManipulationPOMDP(GenerativePOMDP):
             )
         return False
 
+    def _fills(self, world: ManipulationWorld, part) -> bool:
+        """Whether the full robot, knowing the cabinet, puts the object onto the open
+        cell ``part`` (Pick from the side, then Place: a Shelf target is drawn among
+        such cells; many cells are too low or too tight for the arm)."""
+        world.reset()
+        if not Pick("object", "side").run(world, ctx=self.ctx).ok:
+            return False
+        T = world.scene.T_world_cabinet
+        try:
+            targets = place_targets(world.scene.cabinet_spec, part.link, 0.0, T)
+        except ConfigError:
+            return False
+        for tgt in targets:
+            out = Place("object", tgt.p, tgt.lift).run(world, ctx=self.ctx)
+            if out.status != "ik_infeasible":
+                break
+        T_now = world.body_pose(world.scene.cabinet_prefix + world.scene.cabinet.root)
+        spec = world.scene.cabinet_spec
+        return bool(out.ok and inside(spec, part.link, 0.0, T_now, world.object_pose()))
+
     def _target_link(self, i: int, point: np.ndarray) -> str | None:
         w = self._need_worlds()
         return _part_at_point(w.particles[i].spec, w.pose(i), point, TASK_KINDS[self.task])
@@ -435,7 +488,7 @@ class ManipulationPOMDP(GenerativePOMDP):
             if out is not None and out.status != "ik_infeasible":
                 break
         if out is None:
-            return sim, observation_key(NOT_APPLICABLE, self._holds(tw.world), np.zeros(3)), \
+            return sim, observation_key(NOT_APPLICABLE, holds_object(tw.world), np.zeros(3)), \
                 0.0, False, f"{a.skill}: {NOT_APPLICABLE}"  # fmt: skip
         motion = self._handle(i, a, tw.world) - before
         reward = self._reward(w.particles[i].spec, self.targets[i], tw.world, out)
@@ -504,9 +557,12 @@ class ManipulationPOMDP(GenerativePOMDP):
         return np.zeros(3) if pt is None else pt
 
     def _reward(self, spec: CabinetSpec, target: str | None, world, out: Outcome) -> float:
+        """-10 when dragged; +10 when a ``Place`` leaves the object resting in the target
+        (only a Place can: a model that believes the object already in it, after a real
+        Place that failed, earns nothing from its other actions)."""
         if dragged(out.cabinet_displacement):
             return -10.0
-        if target is None or out.holding:
+        if target is None or out.holding or out.skill != "Place":
             return 0.0
         q = world.part_positions().get(world.scene.cabinet_prefix + spec.part(target).joint, 0.0)
         T_now = world.body_pose(world.scene.cabinet_prefix + world.scene.cabinet.root)
@@ -602,13 +658,7 @@ class ManipulationPOMDP(GenerativePOMDP):
     def _holding(self, s: ManipState) -> bool:
         tw = self._need_worlds().twins[s.origin]
         tw.restore(s.sim)
-        return self._holds(tw.world)
-
-    @staticmethod
-    def _holds(world: ManipulationWorld) -> bool:
-        """The object is in the hand (as :class:`Place` tells: within 0.1 m of the TCP)."""
-        tcp = world.site_pose(GRIPPER_SITE)[:3, 3]
-        return bool(np.linalg.norm(tcp - world.object_pose()[:3, 3]) < 0.1)
+        return holds_object(tw.world)
 
     def _open_enough(self, s: ManipState, k: int) -> bool:
         w = self._need_worlds()
