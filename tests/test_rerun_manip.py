@@ -71,12 +71,18 @@ def _replay_outcome(world: ManipulationWorld, joint: str, values: list[float]) -
     )  # fmt: skip
 
 
+def _recording(tmp_path: Path, name: str) -> tuple[Path, rr.RecordingStream]:
+    """A new stream saving to ``tmp_path / name.rrd``."""
+    path = tmp_path / f"{name}.rrd"
+    stream = rr.RecordingStream(f"test_rerun_manip_{name}")
+    stream.save(str(path))
+    return path, stream
+
+
 def test_recording_verifies_with_geometry_poses_camera_and_joints(
     world: ManipulationWorld, tmp_path: Path
 ) -> None:
-    path = tmp_path / "episode.rrd"
-    stream = rr.RecordingStream("test_rerun_manip")
-    stream.save(str(path))
+    path, stream = _recording(tmp_path, "episode")
     logger = WorldLogger(stream, world)
     stream.set_time("step", sequence=0)
     logger.log_pose()
@@ -125,9 +131,7 @@ def test_recording_verifies_with_geometry_poses_camera_and_joints(
 def test_log_replay_logs_every_frame_and_leaves_the_world_as_it_was(
     world: ManipulationWorld, tmp_path: Path
 ) -> None:
-    path = tmp_path / "replay.rrd"
-    stream = rr.RecordingStream("test_rerun_manip_replay")
-    stream.save(str(path))
+    path, stream = _recording(tmp_path, "replay")
     logger = WorldLogger(stream, world)
     joint = world.part_joints[0]
     outcome = _replay_outcome(world, joint, [0.0, 0.1, 0.2])
@@ -152,9 +156,7 @@ def test_log_replay_logs_every_frame_and_leaves_the_world_as_it_was(
 def test_log_replay_thins_frames_but_keeps_the_last(
     world: ManipulationWorld, tmp_path: Path
 ) -> None:
-    path = tmp_path / "thin.rrd"
-    stream = rr.RecordingStream("test_rerun_manip_thin")
-    stream.save(str(path))
+    path, stream = _recording(tmp_path, "thin")
     logger = WorldLogger(stream, world)
     outcome = _replay_outcome(world, world.part_joints[0], [0.0, 0.02, 0.04, 0.06, 0.08])
     assert logger.log_replay(outcome, every=3) == pytest.approx(0.4)

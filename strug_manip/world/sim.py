@@ -360,6 +360,11 @@ class ManipulationWorld:
             np.linalg.norm(self.data.xpos[self._cabinet_body][:2] - self._cabinet_start[:2])
         )
 
+    def cabinet_pose(self) -> np.ndarray:
+        """The cabinet frame now (its base's body pose), 4x4 (``scene.T_world_cabinet``
+        is where it stood at reset)."""
+        return _pose(self.data.xmat[self._cabinet_body], self.data.xpos[self._cabinet_body])
+
     def object_pose(self) -> np.ndarray:
         """``T_world_object``, 4x4."""
         return _pose(self.data.xmat[self._object_body], self.data.xpos[self._object_body])

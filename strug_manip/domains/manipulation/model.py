@@ -34,6 +34,7 @@ likelihood.
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from collections.abc import Hashable, Sequence
@@ -47,6 +48,7 @@ from perception.parts import Perceiver
 from planners.belief import ParticleBelief
 from planners.errors import ConfigError, UnknownNameError, check_positive_int
 from planners.pomdp import ActionSchema, ActionSpace, GenerativePOMDP, Step
+from planners.tru import execute_plan
 from strug_manip.control import (
     ControlContext,
     OpenDoor,
@@ -349,13 +351,7 @@ class ManipulationPOMDP(GenerativePOMDP):
             opening = "OpenDrawer" if part.hypotheses[h] == "drawer" else "OpenDoor"
             plan = [ManipAction(opening, k, h), *tail]
             first = first or plan
-            state, ret = s, 0.0
-            for act in plan:
-                state, _, r, done = self.step(state, act, rng)
-                ret += r
-                if done:
-                    break
-            if ret > 0:
+            if execute_plan(self, s, plan, rng, self.discount)[0] > 0:
                 return plan
         return first or []
 
@@ -434,19 +430,20 @@ class ManipulationPOMDP(GenerativePOMDP):
         T = world.scene.T_world_cabinet
         joint = BelievedJoint.of_part(part, 0.0, T)
         opening = OpenDrawer if part.joint_type == "prismatic" else OpenDoor
-        for g in handle_grasps(part, 0.0, T):
+
+        def run(g: np.ndarray):
             world.reset()
-            out = opening(g, joint).run(world, ctx=self.ctx)
-            if out.status == "ik_infeasible":
-                continue
-            q = world.part_positions()[world.scene.cabinet_prefix + part.joint]
-            T_now = world.body_pose(world.scene.cabinet_prefix + world.scene.cabinet.root)
-            return (
-                out.ok
-                and not dragged(out.cabinet_displacement)
-                and open_enough(world.scene.cabinet_spec, part.link, q, T_now)
-            )
-        return False
+            return opening(g, joint).run(world, ctx=self.ctx)
+
+        out = _first_feasible(functools.partial(run, g) for g in handle_grasps(part, 0.0, T))
+        if out is None or out.status == "ik_infeasible":
+            return False
+        q = _position(world, part.joint)
+        return (
+            out.ok
+            and not dragged(out.cabinet_displacement)
+            and open_enough(world.scene.cabinet_spec, part.link, q, world.cabinet_pose())
+        )
 
     def _fills(self, world: ManipulationWorld, part) -> bool:
         """Whether the full robot, knowing the cabinet, puts the object onto the open
@@ -460,13 +457,14 @@ class ManipulationPOMDP(GenerativePOMDP):
             targets = place_targets(world.scene.cabinet_spec, part.link, 0.0, T)
         except ConfigError:
             return False
-        for tgt in targets:
-            out = Place("object", tgt.p, tgt.lift).run(world, ctx=self.ctx)
-            if out.status != "ik_infeasible":
-                break
-        T_now = world.body_pose(world.scene.cabinet_prefix + world.scene.cabinet.root)
-        spec = world.scene.cabinet_spec
-        return bool(out.ok and inside(spec, part.link, 0.0, T_now, world.object_pose()))
+        out = _first_feasible(
+            functools.partial(Place("object", t.p, t.lift).run, world, ctx=self.ctx)
+            for t in targets
+        )
+        spec, T_now = world.scene.cabinet_spec, world.cabinet_pose()
+        return bool(
+            out is not None and out.ok and inside(spec, part.link, 0.0, T_now, world.object_pose())
+        )
 
     def _target_link(self, i: int, point: np.ndarray) -> str | None:
         w = self._need_worlds()
@@ -481,12 +479,12 @@ class ManipulationPOMDP(GenerativePOMDP):
         tw = w.twins[i]
         tw.restore(sim)
         before = self._handle(i, a, tw.world)
-        out = None
-        for skill in candidates:
+
+        def run(skill):
             tw.restore(sim)
-            out = _attempt(lambda sk=skill: sk.simulate(tw, plan_world=plan_world))
-            if out is not None and out.status != "ik_infeasible":
-                break
+            return skill.simulate(tw, plan_world=plan_world)
+
+        out = _first_feasible(functools.partial(run, sk) for sk in candidates)
         if out is None:
             return sim, observation_key(NOT_APPLICABLE, holds_object(tw.world), np.zeros(3)), \
                 0.0, False, f"{a.skill}: {NOT_APPLICABLE}"  # fmt: skip
@@ -512,8 +510,8 @@ class ManipulationPOMDP(GenerativePOMDP):
             tw = w.twins[i]
             tw.restore(sim)
             world = tw.world
-            q = world.part_positions().get(world.scene.cabinet_prefix + _joint(w, i, link), 0.0)
-            T_now = world.body_pose(world.scene.cabinet_prefix + world.scene.cabinet.root)
+            q = _position(world, w.particles[i].spec.part(link).joint)
+            T_now = world.cabinet_pose()
             try:
                 tgts = place_targets(w.particles[i].spec, link, q, T_now)
             except ConfigError:
@@ -539,7 +537,7 @@ class ManipulationPOMDP(GenerativePOMDP):
         if a.skill in ("Pick", "Place"):
             return world.object_pose()[:3, 3].copy()
         spec = world.scene.cabinet_spec
-        T = world.body_pose(world.scene.cabinet_prefix + world.scene.cabinet.root)
+        T = world.cabinet_pose()
         qs = world.part_positions()
         if i == REAL:
             ref = self.parts[a.part].point
@@ -564,8 +562,8 @@ class ManipulationPOMDP(GenerativePOMDP):
             return -10.0
         if target is None or out.holding or out.skill != "Place":
             return 0.0
-        q = world.part_positions().get(world.scene.cabinet_prefix + spec.part(target).joint, 0.0)
-        T_now = world.body_pose(world.scene.cabinet_prefix + world.scene.cabinet.root)
+        q = _position(world, spec.part(target).joint)
+        T_now = world.cabinet_pose()
         return 10.0 if inside(spec, target, q, T_now, world.object_pose()) else 0.0
 
     def _key_loglik(self, key: tuple[float, ...], s: ManipState, a: ManipAction) -> float:
@@ -590,12 +588,11 @@ class ManipulationPOMDP(GenerativePOMDP):
         if plan_world is None:
             plan_world = self._need_worlds().fetch(i, state)
         before = self._handle(REAL, a, world)
-        out, seed = None, int(rng.integers(2**31))
-        for skill in candidates:
-            out = _attempt(lambda sk=skill: sk.run(world, ctx=self.ctx, plan_world=plan_world,
-                                                   seed=seed))  # fmt: skip
-            if out is not None and out.status != "ik_infeasible":
-                break
+        seed = int(rng.integers(2**31))
+        out = _first_feasible(
+            functools.partial(sk.run, world, ctx=self.ctx, plan_world=plan_world, seed=seed)
+            for sk in candidates
+        )
         if out is None:
             status, holding, motion, reward, summary = NOT_APPLICABLE, False, np.zeros(3), 0.0, \
                 f"{a.skill}: {NOT_APPLICABLE} under the likeliest model"  # fmt: skip
@@ -666,8 +663,8 @@ class ManipulationPOMDP(GenerativePOMDP):
         tw = w.twins[s.origin]
         tw.restore(s.sim)
         world = tw.world
-        q = world.part_positions().get(world.scene.cabinet_prefix + _joint(w, s.origin, link), 0)
-        T_now = world.body_pose(world.scene.cabinet_prefix + world.scene.cabinet.root)
+        q = _position(world, w.particles[s.origin].spec.part(link).joint)
+        T_now = world.cabinet_pose()
         return open_enough(w.particles[s.origin].spec, link, q, T_now)
 
     def _check_action(self, a: Hashable) -> ManipAction:
@@ -697,8 +694,21 @@ def _attempt(run) -> Outcome | None:
         return None
 
 
-def _joint(w: ParticleWorlds, i: int, link: str) -> str:
-    return w.particles[i].spec.part(link).joint
+def _position(world: ManipulationWorld, joint: str) -> float:
+    """Cabinet joint ``joint``'s position in ``world`` [m or rad] (0 for a fixed part)."""
+    return world.part_positions().get(world.scene.cabinet_prefix + joint, 0.0)
+
+
+def _first_feasible(runs) -> Outcome | None:
+    """The outcome of the first of ``runs`` (callables, each a skill with its next
+    grasp or placement) that is not ``ik_infeasible``, else the last one's (None when
+    it could not be planned: :func:`_attempt`)."""
+    out = None
+    for run in runs:
+        out = _attempt(run)
+        if out is not None and out.status != "ik_infeasible":
+            break
+    return out
 
 
 def _point(name: str, v: Sequence[float]) -> np.ndarray:
