@@ -594,7 +594,8 @@ class ManipulationPOMDP(GenerativePOMDP):
             for sk in candidates
         )
         if out is None:
-            status, holding, motion, reward, summary = NOT_APPLICABLE, False, np.zeros(3), 0.0, \
+            status, holding, motion, reward, summary = NOT_APPLICABLE, holds_object(world), \
+                np.zeros(3), 0.0, \
                 f"{a.skill}: {NOT_APPLICABLE} under the likeliest model"  # fmt: skip
         else:
             real.outcomes.append(out)
