@@ -373,9 +373,13 @@ class ManipulationPOMDP(GenerativePOMDP):
         return f"target: {top}; ESS {belief.ess():.1f} of {len(belief)}"
 
     def report(self) -> dict[str, Any]:
-        """Where this episode's time went [s] and the caches' hit rates."""
+        """Where this episode's time went [s], the caches' hit rates, and what the real
+        robot's skills did (``real``: ``skill status`` per step that ran one)."""
         w = self.worlds
         out: dict[str, Any] = {"time": self.timers.as_dict()}
+        if self.real is not None:
+            out["cabinet_seed"] = self.real.seed
+            out["real"] = [f"{o.skill} {o.status}" for o in self.real.outcomes]
         if w is not None:
             out["time"].update({k: v for k, v in w.timers.as_dict().items() if v})
             out["outcome_cache"] = {"hits": w.outcomes.hits, "misses": w.outcomes.misses,
