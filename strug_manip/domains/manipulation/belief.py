@@ -369,10 +369,12 @@ def sample_particles(
     return out
 
 
-#: Where the open cell's walls are read from: points this far behind the front plane
-#: [m] (the boards' front edges and the walls just inside the opening; deeper, the back
-#: panel would pass for a wall).
-CELL_BAND = (0.02, 0.12)
+#: Where the open cell's boards and walls are read from: points between these
+#: distances along the front's normal [m] (from 12 cm behind the front plane to 1 cm
+#: before it, for noise): the boards' and walls' front edges, which the head camera
+#: sees even where it sees neither a board's underside nor, deeper, anything but the
+#: back panel, which would pass for a wall.
+CELL_BAND = (-0.12, 0.01)
 #: Half-width of the column above and below the point where boards are looked for [m].
 CELL_COLUMN = 0.04
 
@@ -383,7 +385,7 @@ def open_cell(model: CabinetModel, point: np.ndarray, clouds: Sequence[np.ndarra
     :func:`~strug_manip.world.views.cabinet_cloud` of the views perception had).
 
     The network finds movable parts only; an open cell is empty space between boards.
-    Just inside the opening (:data:`CELL_BAND`), the highest surface below ``point``
+    Across the opening (:data:`CELL_BAND`), the highest surface below ``point``
     is the cell's floor (a board's top), the lowest above it its ceiling (at most the
     model's carcass top), and the
     nearest surfaces left and right of it at mid-height its walls; where none is seen
@@ -393,7 +395,7 @@ def open_cell(model: CabinetModel, point: np.ndarray, clouds: Sequence[np.ndarra
     P = np.concatenate([np.asarray(c, dtype=float).reshape(-1, 3) for c in clouds])
     P = P @ T[:3, :3].T + T[:3, 3]
     _, yt, zt = T[:3, :3] @ np.asarray(point, dtype=float) + T[:3, 3]
-    inside = (P[:, 0] < -CELL_BAND[0]) & (P[:, 0] > -CELL_BAND[1])
+    inside = (P[:, 0] > CELL_BAND[0]) & (P[:, 0] < CELL_BAND[1])
     col = inside & (np.abs(P[:, 1] - yt) < CELL_COLUMN)
     below, above = P[col & (P[:, 2] < zt - 0.01), 2], P[col & (P[:, 2] > zt + 0.01), 2]
     floor = below.max() if len(below) else WALL
@@ -415,8 +417,9 @@ def with_open_cell(
     clouds: Sequence[np.ndarray],
     scene: tuple[float, float, float] = (1.0, 0.0, 0.5),
 ) -> Particle:
-    """``particle`` with the open cell at ``point`` (:func:`open_cell`) added, unless
-    one of its parts covers the point already (it then believes something is there)."""
+    """``particle`` with the open cell at ``point`` (:func:`open_cell`) and the board
+    above it added, unless one of its parts covers the point already (it then believes
+    something is there)."""
     m = particle.model
     T = np.linalg.inv(np.asarray(m.T_world_front, dtype=float))
     _, y, z = T[:3, :3] @ np.asarray(point, dtype=float) + T[:3, 3]
@@ -425,11 +428,18 @@ def with_open_cell(
     cell = open_cell(m, point, clouds)
     if any(_overlaps(cell.rect, o.rect) for o in m.parts):
         return particle
-    parts = (*m.parts, cell)
+    # The board above the cell too (as the floor of the space above it, up to the
+    # carcass's top): the arm's free motions must clear it.
+    y0, y1, _, top = cell.rect
+    above = PartModel("shelf", (y0, y1, top, m.height - WALL), np.zeros(3), np.zeros(3)) \
+        if m.height - WALL - top > 0.05 else None  # fmt: skip
+    extra = (above,) if above is not None and not any(
+        _overlaps(above.rect, o.rect) for o in m.parts) else ()  # fmt: skip
+    parts = (*m.parts, cell, *extra)
     model = dataclasses.replace(m, parts=parts)
     spec, q = assemble(model, *scene)
     # Per part of the spec (top to bottom, left to right), the fused hypothesis it
-    # came from: -1 for the cell, which no hypothesis holds.
+    # came from: -1 for the cells, which no hypothesis holds.
     source = dict(zip(sorted(range(len(m.parts)), key=lambda i: (-m.parts[i].rect[3],
                   m.parts[i].rect[0])), particle.source, strict=True))  # fmt: skip
     order = sorted(range(len(parts)), key=lambda i: (-parts[i].rect[3], parts[i].rect[0]))
