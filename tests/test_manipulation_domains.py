@@ -113,3 +113,51 @@ def test_the_same_seed_gives_the_same_episode():
     a = _record("opendrawer", "random", 3, particles=6, max_steps=2)
     b = _record("opendrawer", "random", 3, particles=6, max_steps=2)
     assert a == b
+
+
+def test_open_cell_is_read_off_the_boards_and_walls_front_edges():
+    from strug_manip.domains.manipulation.belief import open_cell
+    from strug_manip.objects.assembly import CabinetModel
+
+    model = CabinetModel(0.6, 0.8, 0.4, (), np.eye(4))
+    rng = np.random.default_rng(0)
+
+    def slab(x, y, z, n=400):
+        return np.column_stack([rng.uniform(*x, n), rng.uniform(*y, n), rng.uniform(*z, n)])
+
+    cloud = np.concatenate([
+        slab((-0.01, 0.0), (-0.28, 0.28), (0.292, 0.300)),  # the floor board's front edge
+        slab((-0.01, 0.0), (-0.28, 0.28), (0.600, 0.608)),  # the board above
+        slab((-0.3, -0.2), (-0.28, 0.28), (0.0, 0.8)),  # the back panel: not a wall
+        slab((-0.1, 0.0), (0.280, 0.300), (0.0, 0.8)),  # the right wall
+    ])  # fmt: skip
+    cell = open_cell(model, np.array([0.0, 0.0, 0.45]), [cloud])
+    y0, y1, z0, z1 = cell.rect
+    assert cell.kind == "shelf"
+    assert y0 == pytest.approx(-0.6 / 2 + 0.0175)  # no left wall seen: the carcass's
+    assert y1 == pytest.approx(0.28, abs=2e-3)
+    assert z0 + 0.008 == pytest.approx(0.300, abs=1e-3)  # the board's top is the floor
+    assert z1 == pytest.approx(0.600, abs=1e-3)
+
+
+def test_the_belief_takes_over_what_the_robot_knows_after_a_real_step(drawer_episode):
+    d, s0, belief = drawer_episode
+    rng = np.random.default_rng(0)
+    real = d.step(s0, ManipAction("Pick", grasp="top"), rng)
+    moved = [d.step(s, ManipAction("Pick", grasp="top"), rng).state for s in belief.states]
+    d.real.world.restore(real.state.sim)
+    shift = np.eye(4)
+    shift[:3, 3] = [0.03, -0.02, 0.0]  # as if the real cabinet had been dragged
+    d.real.world.set_cabinet_pose(shift @ d.real.world.cabinet_pose())
+    conditioned = d.condition(type(belief)(moved, belief.weights, belief.origin))
+    rw = d.real.world
+    moved = rw.cabinet_pose() @ np.linalg.inv(rw.scene.T_world_cabinet)
+    assert np.linalg.norm(moved[:2, 3]) > 0.03
+    for s in conditioned.states:
+        tw = d.worlds.twins[s.origin]
+        tw.restore(s.sim)
+        # Each model's cabinet moved as the real one did, from where it stood itself.
+        assert np.allclose(tw.world.cabinet_pose(), moved @ tw.world.scene.T_world_cabinet,
+                           atol=1e-6)  # fmt: skip
+        assert np.allclose(tw.robot_base[:2], [d.real.world.robot_qpos()[j] for j in
+                                               ("base_x_joint", "base_y_joint")])  # fmt: skip

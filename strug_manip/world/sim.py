@@ -365,6 +365,18 @@ class ManipulationWorld:
         is where it stood at reset)."""
         return _pose(self.data.xmat[self._cabinet_body], self.data.xpos[self._cabinet_body])
 
+    def set_cabinet_pose(self, T_world_cabinet: np.ndarray) -> None:
+        """Put the cabinet's base (its free joint) at ``T_world_cabinet`` (4, 4), at rest,
+        its parts as they are; then update the kinematics."""
+        m, d = self.model, self.data
+        j = m.joint(self.scene.cabinet_prefix + "free").id
+        a, v = m.jnt_qposadr[j], m.jnt_dofadr[j]
+        T = np.asarray(T_world_cabinet, dtype=float)
+        d.qpos[a : a + 3] = T[:3, 3]
+        mujoco.mju_mat2Quat(d.qpos[a + 3 : a + 7], np.ascontiguousarray(T[:3, :3]).reshape(9))
+        d.qvel[v : v + 6] = 0.0
+        mujoco.mj_kinematics(m, d)
+
     def object_pose(self) -> np.ndarray:
         """``T_world_object``, 4x4."""
         return _pose(self.data.xmat[self._object_body], self.data.xpos[self._object_body])

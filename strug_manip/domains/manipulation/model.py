@@ -211,11 +211,13 @@ class ManipulationPOMDP(GenerativePOMDP):
         the real robot plans against its likeliest models.
 
         Known in every particle alike: where the robot's base stands (its odometry),
-        where the cabinet's base stands (the carcass, which the head camera's cloud
-        shows to millimetres; taken from the simulator as a perfect localisation) and,
-        when the hand is empty, where the object rests (it is tracked as well). Each
-        particle keeps its own parts' joints and, when the real hand holds the object,
-        its own idea of the grasp. Without this a cabinet the real robot dragged by 5 cm
+        how far the cabinet's base has moved since the start (the carcass, which the
+        head camera's cloud shows to millimetres; taken from the simulator as a perfect
+        localisation; each particle's own cabinet moves by that rigid motion from where
+        it stood, its own front where perception put it) and, when the hand is empty,
+        where the object rests (it is tracked as well). Each particle keeps its own
+        parts' joints and, when the real hand holds the object, its own idea of the
+        grasp. Without this a cabinet the real robot dragged by 5 cm
         stays put in every particle, and the next Place aims 5 cm off.
         """
         real, w = self.real, self.worlds
@@ -224,13 +226,15 @@ class ManipulationPOMDP(GenerativePOMDP):
             return belief
         rw = real.world
         base = np.array([rw.robot_qpos()[j] for j in BASE_JOINTS])
-        known = [rw.scene.cabinet_prefix + "free", *(() if holds_object(rw) else (OBJECT_JOINT,))]
+        moved = rw.cabinet_pose() @ np.linalg.inv(rw.scene.T_world_cabinet)
+        known = [] if holds_object(rw) else [OBJECT_JOINT]
         done: dict[ManipState, ManipState] = {}
         states = []
         for s in belief.states:
             if s not in done:
                 tw = w.twins[s.origin]
                 tw.restore(s.sim)
+                tw.world.set_cabinet_pose(moved @ tw.world.scene.T_world_cabinet)
                 tw.world.copy_joints(rw, known)
                 tw.set_robot_base(base)
                 done[s] = ManipState(s.origin, tw.snapshot(), s.t, s.last)
