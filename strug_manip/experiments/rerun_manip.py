@@ -34,6 +34,7 @@ import pyarrow as pa
 import rerun as rr
 
 from planners.errors import ConfigError, check_positive_int
+from strug_manip.world.sim import MAX_DEPTH  # background depths: logged as 0, "no depth"
 
 if TYPE_CHECKING:
     from strug_manip.control.outcome import Outcome
@@ -44,9 +45,6 @@ if TYPE_CHECKING:
 FLOOR_HALF = 3.0
 #: Thickness of the floor box (its top face is the plane) [m].
 FLOOR_THICKNESS = 0.002
-#: Depths at or beyond this are background (as :func:`~strug_manip.world.sim.depth_to_points`
-#: drops them); logged as 0, rerun's "no depth" [m].
-MAX_DEPTH = 10.0
 #: Colour ramp of :func:`log_joints`, light (weight 0) to dark (the heaviest), RGB.
 LIGHT, DARK = np.array([198, 219, 239]), np.array([8, 48, 107])
 #: Colour of a logged point cloud, RGB.

@@ -29,6 +29,8 @@ from strug_manip.world.scene import SceneConfig, SceneModel, build_scene
 
 #: The graspable object's free joint (its pose is observed, not believed).
 OBJECT_JOINT = "object/free"
+#: Depths at or beyond this are background (the renderer's far plane) [m].
+MAX_DEPTH = 10.0
 #: What a snapshot holds: MuJoCo's full integration state (time, qpos, qvel, act,
 #: warm start, controls, applied forces, mocap poses, equality activations).
 _STATE = mujoco.mjtState.mjSTATE_INTEGRATION
@@ -88,7 +90,7 @@ def _pose(xmat: np.ndarray, xpos: np.ndarray) -> np.ndarray:
 
 
 def depth_to_points(
-    depth: np.ndarray, T_world_camera: np.ndarray, fovy: float, max_depth: float = 10.0
+    depth: np.ndarray, T_world_camera: np.ndarray, fovy: float, max_depth: float = MAX_DEPTH
 ) -> tuple[np.ndarray, np.ndarray]:
     """World-frame points of a depth image.
 
