@@ -141,7 +141,13 @@ def build_parser() -> argparse.ArgumentParser:
     bench = sub.add_parser("bench", help="run a Table I grid of episodes, resumable")
     bench.add_argument("--domains", required=True, help=f"comma-separated: {domains}")
     bench.add_argument("--solvers", required=True, help="comma-separated solver names")
-    bench.add_argument("--seeds", type=positive_int, required=True, help="seeds 0..N-1 per cell")
+    bench.add_argument("--seeds", type=positive_int, required=True, help="N seeds per cell")
+    bench.add_argument(
+        "--first-seed",
+        type=int,
+        default=0,
+        help="seeds are FIRST..FIRST+N-1 (default 0): report on a range no tuning used",
+    )
     bench.add_argument("--out", type=Path, required=True, help="output directory")
     bench.add_argument(
         "--workers",
@@ -283,7 +289,12 @@ def cmd_bench(args: argparse.Namespace) -> int:
     if args.address is not None and args.executor != "ray":
         raise ConfigError("--address is for --executor ray; add --executor ray")
     spec = BenchSpec(
-        _split(args.domains), _split(args.solvers), args.seeds, _overrides(args), args.particles
+        _split(args.domains),
+        _split(args.solvers),
+        args.seeds,
+        _overrides(args),
+        args.particles,
+        args.first_seed,
     )
     output_dir(args.out, "--out")
     summary = run_bench(

@@ -161,3 +161,72 @@ def test_the_belief_takes_over_what_the_robot_knows_after_a_real_step(drawer_epi
                            atol=1e-6)  # fmt: skip
         assert np.allclose(tw.robot_base[:2], [d.real.world.robot_qpos()[j] for j in
                                                ("base_x_joint", "base_y_joint")])  # fmt: skip
+
+
+def _standing_front(z: float, depth: float = 0.4) -> np.ndarray:
+    """A front frame as the scene's cabinet table has it (facing the robot), its
+    bottom ``z`` high [m]."""
+    from strug_manip.objects.assembly import scene_object_pose
+
+    T = scene_object_pose(depth, 1.0, 0.0, 0.5)
+    F = np.eye(4)
+    F[:3, :3] = T[:3, :3]
+    F[:3, 3] = T[:3, :3] @ [depth / 2, 0.0, 0.0] + T[:3, 3]
+    F[2, 3] = z
+    return F
+
+
+def test_a_perceived_cabinet_stands_on_the_table_with_its_parts_where_they_were_seen():
+    from strug_manip.objects.assembly import CabinetModel, PartModel, on_stand
+
+    drawer = PartModel("drawer", (-0.2, 0.2, 0.10, 0.25), np.array([1.0, 0.0, 0.0]),
+                       np.array([0.0, 0.0, 0.175]), upper=0.3, handle_pos=np.array(
+                           [0.02, 0.0, 0.2]))  # fmt: skip
+    seen = CabinetModel(0.6, 0.8, 0.4, (drawer,), _standing_front(0.493))
+    stood = on_stand(seen, 0.5)
+    assert stood.T_world_front[2, 3] == pytest.approx(0.5)
+
+    def world_z(m, k):  # the drawer's bottom (k=2) or top (k=3) in the world
+        return float((m.T_world_front @ [0.0, 0.0, m.parts[0].rect[k], 1.0])[2])
+
+    for k in (2, 3):
+        assert world_z(stood, k) == pytest.approx(world_z(seen, k))
+    for name in ("origin", "handle_pos"):
+        before = seen.T_world_front @ [*getattr(seen.parts[0], name), 1.0]
+        after = stood.T_world_front @ [*getattr(stood.parts[0], name), 1.0]
+        assert np.allclose(before, after)
+    assert stood.height + 0.5 == pytest.approx(seen.height + 0.493)  # the top stays too
+    assert on_stand(stood, 0.5) is stood
+
+
+def test_the_open_cell_keeps_its_measured_height_under_the_board_added_above_it():
+    from strug_manip.domains.manipulation.belief import Particle, open_cell, with_open_cell
+    from strug_manip.objects.assembly import CabinetModel, assemble, scene_object_pose
+
+    F = _standing_front(0.5)
+    model = CabinetModel(0.6, 0.8, 0.4, (), F)
+    rng = np.random.default_rng(0)
+
+    def slab(y, z, n=400):  # a board's front edge, in the front frame, to the world
+        P = np.column_stack([rng.uniform(-0.01, 0.0, n), rng.uniform(*y, n), rng.uniform(*z, n)])
+        return P @ F[:3, :3].T + F[:3, 3]
+
+    cloud = np.concatenate([slab((-0.28, 0.28), (0.292, 0.300)),
+                            slab((-0.28, 0.28), (0.420, 0.428))])  # fmt: skip
+    point = F[:3, :3] @ [0.0, 0.0, 0.36] + F[:3, 3]
+    spec, q = assemble(model)
+    cell = open_cell(model, point, [cloud])
+    grown = with_open_cell(Particle(model, spec, q, (), 0), point, [cloud])
+    assert len(grown.model.parts) == 2  # the cell and the space above it
+    # No carcass board inside the opening: floor (0.300) to ceiling (0.420).
+    T_wo = scene_object_pose(0.4, 1.0, 0.0, 0.5)
+    floor = float((F @ [0, 0, cell.rect[2] + 0.008, 1])[2])
+    ceiling = float((F @ [0, 0, cell.rect[3], 1])[2])
+    assert ceiling - floor == pytest.approx(0.12, abs=2e-3)
+    for g in grown.spec.body_geoms:
+        if g.name in ("back", "side_left", "side_right"):
+            continue
+        c = T_wo[:3, :3] @ np.asarray(g.pos) + T_wo[:3, 3]
+        lo, hi = c[2] - g.size[2] / 2, c[2] + g.size[2] / 2
+        across = abs(c[1]) < 0.25
+        assert not (across and lo < ceiling - 1e-6 and hi > floor + 1e-6), (g.name, lo, hi)

@@ -45,10 +45,11 @@ class BenchSpec:
     Attributes:
         domains: canonical domain names, or ``package.module:Class`` for a user's own.
         solvers: canonical solver names.
-        seeds: number of seeds; seeds are 0 .. seeds-1.
+        seeds: number of seeds; seeds are ``first_seed`` .. ``first_seed + seeds - 1``.
         overrides: solver config fields set for every solver that has them
             (e.g. ``{"sims": 2000}``); a field no chosen solver has is an error.
         n_particles: belief size.
+        first_seed: the first seed (a range no tuning used, e.g. to report on).
     """
 
     domains: tuple[str, ...]
@@ -56,6 +57,7 @@ class BenchSpec:
     seeds: int
     overrides: dict[str, Any] = field(default_factory=dict)
     n_particles: int = DEFAULT_PARTICLES
+    first_seed: int = 0
 
     def __post_init__(self) -> None:
         if not self.domains:
@@ -69,6 +71,7 @@ class BenchSpec:
                 raise UnknownNameError("solver", s, list(SOLVERS))
         check_positive_int("seeds", self.seeds)
         check_positive_int("n_particles", self.n_particles)
+        check_positive_int("first_seed", self.first_seed, allow_zero=True)
         for s in self.solvers:  # validate every config once, up front
             solver_config(s, self.overrides)
         fields = {f for s in self.solvers for f in SOLVERS[s].field_names()}
@@ -82,7 +85,8 @@ class BenchSpec:
 
     def tasks(self) -> list[tuple[str, str, int]]:
         """Every (domain, solver, seed), seeds innermost-last so early rows fill first."""
-        return [(d, s, k) for k in range(self.seeds) for d in self.domains for s in self.solvers]
+        seeds = range(self.first_seed, self.first_seed + self.seeds)
+        return [(d, s, k) for k in seeds for d in self.domains for s in self.solvers]
 
 
 def solver_config(solver: str, overrides: dict[str, Any]) -> Any:

@@ -28,6 +28,7 @@ samples them from the generator's ranges).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -132,6 +133,37 @@ class CabinetModel:
             v = getattr(self, name)
             if not (math.isfinite(v) and 0.1 <= v <= 3.0):
                 raise ConfigError(f"CabinetModel.{name} must be in [0.1, 3] m, got {v!r}")
+
+
+def on_stand(model: CabinetModel, stand: float) -> CabinetModel:
+    """``model`` with its bottom on the cabinet table's top (``stand`` [m] high) and
+    every part where it was in the world.
+
+    The scene stands a spec's lowest point on the table (:func:`~strug_manip.world.
+    scene.build_scene`); a front frame perceived a little below or above the table top
+    would otherwise carry every part up or down by the difference. The front frame is
+    taken as upright (its z along the world's): the shift goes into its height, the
+    carcass's height and the parts' rects, joint origins and handles (a part reaching
+    below the new bottom is cut there).
+    """
+    T = np.array(model.T_world_front, dtype=float)
+    dz = float(stand - T[2, 3])
+    if abs(dz) < 1e-6:
+        return model
+    T[2, 3] = stand
+    down = np.array([0.0, 0.0, dz])
+
+    def moved(p: PartModel) -> PartModel:
+        y0, y1, z0, z1 = p.rect
+        return dataclasses.replace(
+            p,
+            rect=(y0, y1, max(z0 - dz, 0.0), z1 - dz),
+            origin=np.asarray(p.origin, float) - down,
+            handle_pos=None if p.handle_pos is None else np.asarray(p.handle_pos, float) - down,
+        )
+
+    parts = tuple(moved(p) for p in model.parts)
+    return CabinetModel(model.width, model.height - dz, model.depth, parts, T)
 
 
 def scene_object_pose(

@@ -57,6 +57,7 @@ from strug_manip.objects.assembly import (
     CabinetModel,
     PartModel,
     assemble,
+    on_stand,
 )
 from strug_manip.objects.generator import CabinetSpec, axis_angle
 
@@ -360,9 +361,10 @@ def sample_particles(
             + [2 * max(abs(m.rect[0]), abs(m.rect[1])) + 0.04 for m in parts]
         )
         height = max([front.height, gen.HEIGHT_RANGE[0]] + [m.rect[3] + 0.02 for m in parts])
-        model = CabinetModel(
-            float(width), float(height), float(depth), tuple(parts), front.T_world_front
-        )
+        # On the table, as the scene stands it: parts stay where perception saw them.
+        model = on_stand(
+            CabinetModel(float(width), float(height), float(depth), tuple(parts),
+                         front.T_world_front), scene[2])  # fmt: skip
         spec, q = assemble(model, *scene)
         order = sorted(range(len(parts)), key=lambda i: (-parts[i].rect[3], parts[i].rect[0]))
         out.append(Particle(model, spec, q, tuple(source[i] for i in order), run))
@@ -429,10 +431,12 @@ def with_open_cell(
     if any(_overlaps(cell.rect, o.rect) for o in m.parts):
         return particle
     # The board above the cell too (as the floor of the space above it, up to the
-    # carcass's top): the arm's free motions must clear it.
+    # carcass's top): the arm's free motions must clear it. Its rect starts a board
+    # above the cell's ceiling: every rect is framed by a board under it, which would
+    # otherwise hang into the cell and lower its ceiling by a board's thickness.
     y0, y1, _, top = cell.rect
-    above = PartModel("shelf", (y0, y1, top, m.height - WALL), np.zeros(3), np.zeros(3)) \
-        if m.height - WALL - top > 0.05 else None  # fmt: skip
+    above = PartModel("shelf", (y0, y1, top + WALL, m.height - WALL), np.zeros(3),
+                      np.zeros(3)) if m.height - WALL - top - WALL > 0.05 else None  # fmt: skip
     extra = (above,) if above is not None and not any(
         _overlaps(above.rect, o.rect) for o in m.parts) else ()  # fmt: skip
     parts = (*m.parts, cell, *extra)
