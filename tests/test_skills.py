@@ -63,6 +63,7 @@ from strug_manip.domains.manipulation.rules import dragged, inside, open_enough
 from strug_manip.objects.hypotheses import BelievedJoint, believed_spec, cell_joints, model_of
 from strug_manip.robot.fetch import (
     ARM_JOINTS,
+    ARM_TORSO_JOINTS,
     BASE_JOINTS,
     CARRY,
     FINGERS_EMPTY,
@@ -631,6 +632,28 @@ def test_what_the_twin_derives_from_a_placement_goes_with_it(worlds) -> None:
     assert len(twin._derived) == 0
     twin.reset()
     assert skill.simulate(twin).same_as(first)  # found anew, the same
+
+
+def test_the_twins_arm_poses_along_a_path_are_forward_kinematics_to_the_millimetre(
+    worlds,
+) -> None:
+    """The twin runs forward kinematics every few steps of a joint path and interpolates
+    between; every step's poses are the exact ones to a millimetre and a milliradian."""
+    world = worlds["mixed_17"]
+    ctx = ControlContext()
+    twin = PlanningTwin(world.scene.cabinet_spec, world.config, ctx)
+    a = np.r_[0.1, -0.05, 0.2, TUCK]
+    b = a + np.r_[0.0, 0.0, 0.0, 0.2, 1.2, -0.8, 1.0, 0.9, -1.1, 0.7, 1.3]
+    joints = a + np.linspace(0.0, 1.0, 301)[:, None] * (b - a)  # 1 rad s^-1 at 5 ms
+    tcp, arm = twin._fk_along(joints)
+    names = (*BASE_JOINTS, *ARM_TORSO_JOINTS)
+    for i in range(len(joints)):
+        T, pos, quat = ctx.ik.frames(dict(zip(names, joints[i].tolist(), strict=True)),
+                                     twin._arm_fetch)  # fmt: skip
+        assert np.linalg.norm(tcp[i, :3] - T[:3, 3]) < 1e-3
+        assert np.max(np.linalg.norm(arm[i, :, :3] - pos, axis=1)) < 1e-3
+        dots = np.abs(np.sum(arm[i, :, 3:] * quat, axis=1))
+        assert np.all(2 * np.arccos(np.clip(dots, -1, 1)) < 2e-3)
 
 
 # --- 5. determinism ---------------------------------------------------------------------

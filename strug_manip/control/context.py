@@ -19,7 +19,7 @@ from strug_manip.control.contacts import ContactChecker
 from strug_manip.control.ik import FetchIK
 from strug_manip.control.motion import ArmMotionPlanner
 from strug_manip.control.outcome import SkillStop
-from strug_manip.control.placement import BASE_COST, Placement
+from strug_manip.control.placement import BASE_COST, Placement, PlacementHints
 from strug_manip.robot.fetch import ARM_TORSO_JOINTS, BASE_JOINTS
 
 #: Per scene model: the model, its planners (first, fallback) and its contact checker.
@@ -57,6 +57,8 @@ class ControlContext:
         self._placements: OrderedDict[Hashable, Placement | SkillStop] = OrderedDict()
         self.placement_hits = 0
         self.placement_misses = 0
+        #: Candidates that worked for recent plans (the planning twins' searches).
+        self.hints = PlacementHints()
 
     def _entry(
         self, model: mujoco.MjModel

@@ -387,10 +387,17 @@ class FetchIK:
     ) -> tuple[np.ndarray, np.ndarray]:
         """World positions (n, 3) [m] and orientations (w, x, y, z) (n, 4) of the
         model's ``bodies`` (ids) at ``q`` (by name; unset joints: home/ready)."""
-        self.forward(q)
+        return self.frames(q, bodies)[1:]
+
+    def frames(
+        self, q: Mapping[str, float], bodies: Sequence[int]
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The TCP's pose (4, 4) and the ``bodies``' world positions (n, 3) [m] and
+        orientations (w, x, y, z) (n, 4) at ``q``, from one forward pass."""
+        T = self.forward(q)
         d = self._config.data
         idx = np.asarray(bodies, dtype=int)
-        return d.xpos[idx].copy(), d.xquat[idx].copy()
+        return T, d.xpos[idx].copy(), d.xquat[idx].copy()
 
     def jacobian(self, q: Mapping[str, float]) -> np.ndarray:
         """The TCP's Jacobian at ``q`` (by name; unset joints: home/ready), shape

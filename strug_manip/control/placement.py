@@ -27,6 +27,7 @@ import dataclasses
 import math
 import time
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -86,6 +87,8 @@ class Placement:
             fingers swapped, :meth:`SkillPlan.flipped`).
         alternatives: the other placements that worked, next best first (e.g. where
             the free motion to this one finds no plan).
+        candidate: which candidate this is: (index into :data:`CANDIDATES`, fingers
+            swapped), a hint for a search of a similar plan (:func:`find_placement`).
     """
 
     base: np.ndarray
@@ -97,6 +100,7 @@ class Placement:
     seconds: float
     plan: SkillPlan
     alternatives: tuple[Placement, ...] = ()
+    candidate: tuple[int, bool] = (0, False)
 
     def start_of(self, k: int) -> tuple[np.ndarray, np.ndarray]:
         """(base (3,), torso + arm (8,)) where line ``k`` starts."""
@@ -105,6 +109,52 @@ class Placement:
         prev = self.base_paths[k - 1]
         base = prev[-1] if prev is not None else self.start_of(k - 1)[0]
         return base, self.lines[k - 1][-1]
+
+
+#: Plans whose work points are this close share a placement hint [m] (the same part
+#: in two belief particles: their handles lie within a few centimetres).
+HINT_RADIUS = 0.05
+#: Hints kept (the most recent first).
+MAX_HINTS = 256
+
+
+class Hint(NamedTuple):
+    """What a placement that worked leaves for a similar plan's search: its candidate
+    (:attr:`Placement.candidate`) and its pre-grasp torso + arm (8,)."""
+
+    candidate: tuple[int, bool]
+    q_pre: np.ndarray
+
+
+class PlacementHints:
+    """Which candidate worked for recent plans, to try first for a similar plan
+    (``find_placement(first=...)``): the same skill, carrying or not, from the same base
+    pose (to 1 cm, 0.02 rad), its work point within :data:`HINT_RADIUS`."""
+
+    def __init__(self) -> None:
+        self._hints: list[tuple[tuple, np.ndarray, Hint]] = []
+
+    @staticmethod
+    def _kind(plan: SkillPlan, robot_base: np.ndarray) -> tuple:
+        b = np.asarray(robot_base, dtype=float)
+        return (plan.skill, plan.carrying is not None, *np.round(b[:2], 2), round(b[2] / 0.02))
+
+    def get(self, plan: SkillPlan, robot_base: np.ndarray) -> Hint | None:
+        """The hint of the latest similar plan, or None."""
+        kind = self._kind(plan, robot_base)
+        work = work_frame(plan, robot_base)[0]
+        for k, w, hint in self._hints:
+            if k == kind and np.linalg.norm(w - work) < HINT_RADIUS:
+                return hint
+        return None
+
+    def put(self, plan: SkillPlan, robot_base: np.ndarray, found: Placement) -> None:
+        """Remember that ``found`` worked for ``plan`` (not ``found`` itself: what the
+        twins derive from a placement lives as long as it does)."""
+        hint = Hint(found.candidate, found.q_pre.copy())
+        entry = (self._kind(plan, robot_base), work_frame(plan, robot_base)[0], hint)
+        self._hints.insert(0, entry)
+        del self._hints[MAX_HINTS:]
 
 
 def work_frame(plan: SkillPlan, robot_base: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -181,10 +231,11 @@ def find_placement(
     postures: tuple[np.ndarray, np.ndarray],
     speeds: tuple[np.ndarray, np.ndarray],
     checker: ContactChecker | None = None,
+    like: Hint | None = None,
 ) -> Placement:
     """A base pose of :func:`candidate_bases` from which ``plan`` is reachable: of the
     first :data:`COMPARED` that work, the one whose reach and lines take the least
-    time.
+    time; or the candidate ``like`` took alone, if it works.
 
     Args:
         plan: the skill's gripper motions.
@@ -197,6 +248,11 @@ def find_placement(
             the reach and the lines (:func:`line_seconds`).
         checker: contacts in the planning world over base + torso + arm, loaded with
             its state (the carried object attached if any); None: kinematic only.
+        like: the hint of a similar plan's placement (the same skill on the same part in
+            another belief particle, centimetres apart): its candidate is tried first,
+            the pre-grasp IK starting from its pre-grasp configuration, and taken as it
+            is if it works (one try instead of a dozen, at the price of not comparing
+            it with others).
 
     Raises:
         SkillStop: ``ik_infeasible``, no candidate works (the reasons counted).
@@ -204,16 +260,31 @@ def find_placement(
     t0 = time.perf_counter()
     reasons: dict[str, int] = {}
     tried = 0
+    plans = (plan, plan.flipped())  # the fingers swapped if need be
+    first = None if like is None else like.candidate
+    if like is not None:
+        index, flip = like.candidate
+        tried += 1
+        candidate = plans[int(flip)]
+        base = candidate_bases(candidate, robot_base)[index]
+        why, found = _try(candidate, ik, wb_ik, base, postures, speeds, checker, like.q_pre)
+        if found is not None:
+            return Placement(base, *found, tried, {}, time.perf_counter() - t0, candidate,
+                             candidate=(index, bool(flip)))  # fmt: skip
+        reasons[why] = 1
     works: list[tuple[float, int, Placement]] = []
-    for candidate in (plan, plan.flipped()):  # the fingers swapped if need be
-        for base in candidate_bases(candidate, robot_base):
+    for flip, candidate in enumerate(plans):
+        for index, base in enumerate(candidate_bases(candidate, robot_base)):
+            if (index, bool(flip)) == first:
+                continue
             tried += 1
             why, found = _try(candidate, ik, wb_ik, base, postures, speeds, checker)
             if found is None:
                 reasons[why] = reasons.get(why, 0) + 1
                 continue
             q_pre, lines, bases = found
-            p = Placement(base, q_pre, lines, bases, tried, {}, 0.0, candidate)
+            p = Placement(base, q_pre, lines, bases, tried, {}, 0.0, candidate,
+                          candidate=(index, bool(flip)))  # fmt: skip
             seconds = _free_seconds(p, postures, speeds[0], checker)
             works.append((seconds + line_seconds(candidate, p, speeds), tried, p))
             if len(works) == COMPARED:
@@ -267,11 +338,14 @@ def _try(
     postures: tuple[np.ndarray, np.ndarray],
     speeds: tuple[np.ndarray, np.ndarray],
     checker: ContactChecker | None,
+    warm: np.ndarray | None = None,
 ) -> tuple[str, tuple | None]:
     """Why ``base`` fails (``""`` and ``(q_pre, lines, base paths)`` if it works).
 
     The pre-grasp IK starts from the arm posture the reach starts from and from the
-    IK's ready posture; of the solutions, the one the arm reaches soonest is tried."""
+    IK's ready posture; of the solutions, the one the arm reaches soonest is tried.
+    Given a ``warm`` start (torso + arm (8,), a similar plan's pre-grasp), from there
+    alone, unless it finds none."""
     drive_q, reach_q = postures
     base_q = dict(zip(BASE_JOINTS, base.tolist(), strict=True))
     if checker is not None:
@@ -279,7 +353,7 @@ def _try(
         if not checker.free(np.concatenate([base, drive_q])):
             return "base blocked", None
     solutions = []
-    for seed in (reach_q, None):
+    for seed in (warm,) if warm is not None else (reach_q, None):
         init = {**base_q, "torso_lift_joint": _torso_for(plan.pre)}
         if seed is not None:
             init.update(zip(ARM_TORSO_JOINTS, seed.tolist(), strict=True))
@@ -287,6 +361,8 @@ def _try(
         if res.success:
             q = np.array([res.q[j] for j in ARM_TORSO_JOINTS])
             solutions.append((timing.duration(np.array([reach_q, q]), speeds[0], 0.0), q))
+    if not solutions and warm is not None:
+        return _try(plan, ik, wb_ik, base, postures, speeds, checker)
     if not solutions:
         return "pre-grasp unreachable", None
     q_pre = min(solutions, key=lambda s: s[0])[1]

@@ -9,7 +9,10 @@ the same :class:`~strug_manip.control.outcome.Outcome`:
 1. **reachability**: the full robot's base placement search (the IK of the pre-grasp
    and every line, the Fetch's collisions checked in a world of the twin's cabinet as
    it is now; cached per twin, plan, base pose and scene state, so a search that
-   simulates a skill again on a particle pays it once): no placement is
+   simulates a skill again on a particle pays it once; a search first tries, alone,
+   the base a similar plan took (the same skill on the same part in another particle,
+   :class:`~.placement.PlacementHints`), so the twin may stand where the full robot,
+   comparing three, would not): no placement is
    ``ik_infeasible``, as for the full robot; a placement gives each line's joint path,
    hence its duration under the one timing law (:mod:`.timing`), the same as the full
    robot's;
@@ -104,6 +107,11 @@ TIMESTEP = 0.005
 #: Where they do touch (an arm link knocking an open door on the stow), the coarser
 #: step can knock harder (1 of 200 tuning runs changed; README).
 FREE_COARSENING = 2
+#: Forward kinematics along a joint path (the stow, the lines after the last release)
+#: runs every this many steps, the poses between interpolated [-]: the hand moves at
+#: most a few centimetres in that time, along an arc whose chord is then well under a
+#: millimetre off it (FK at every step was the largest share of a search's time).
+FK_STRIDE = 8
 #: Programs a twin keeps, the most recently used (:meth:`PlanningTwin.program`).
 PROGRAMS = 32
 #: After its last release the hand leaves the scene (its geoms stop colliding: the full
@@ -273,13 +281,20 @@ class PlanningTwin:
         if pw is not None:
             state = np.round(pw.data.qpos[pw.cabinet_qpos_indices()], 3).tobytes()
         obj = np.round(self.world.data.qpos[self._obj_adr : self._obj_adr + 7], 3).tobytes()
-        return self.ctx.placement(
-            ("twin", self._token(pw), plan.key, base.round(4).tobytes(), state, obj),
-            lambda: find_placement(
+
+        def search() -> Placement:
+            hints = self.ctx.hints
+            found = find_placement(
                 plan, self.ctx.ik, self.ctx.wb_ik, base, (np.array(TUCK), reach),
                 (self.vmax, _BASE_SPEED), self._checker(plan, base, pw),
-            ),
-        )  # fmt: skip
+                like=hints.get(plan, base),
+            )  # fmt: skip
+            hints.put(plan, base, found)
+            return found
+
+        return self.ctx.placement(
+            ("twin", self._token(pw), plan.key, base.round(4).tobytes(), state, obj), search
+        )
 
     def _token(self, pw: ManipulationWorld | None) -> object:
         """A key for planning world ``pw`` in the context's placement cache: an object
@@ -516,13 +531,36 @@ class PlanningTwin:
         return table[key]
 
     def _arm_poses(self, joints: np.ndarray) -> np.ndarray:
-        out = np.empty((len(joints), len(ARM_LINKS), 7))
+        """The arm links' poses (n, L, 7) along ``joints`` (n, 11) (base + torso + arm)."""
+        return self._fk_along(joints)[1]
+
+    def _fk_along(self, joints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The TCP's poses (n, 7) and the arm links' (n, L, 7) (position, quaternion
+        w x y z) along ``joints`` (n, 11) (base + torso + arm, one row per step):
+        forward kinematics every :data:`FK_STRIDE` rows and at the last, interpolated
+        between (linear positions, slerp)."""
+        n = len(joints)
+        idx = np.unique(np.r_[np.arange(0, n, FK_STRIDE), n - 1])
         names = (*BASE_JOINTS, *ARM_TORSO_JOINTS)
-        for i, q in enumerate(joints):
-            pos, quat = self.ctx.ik.body_poses(dict(zip(names, q.tolist(), strict=True)),
-                                               self._arm_fetch)  # fmt: skip
-            out[i, :, :3], out[i, :, 3:] = pos, quat
-        return out
+        coarse = np.empty((len(idx), 1 + len(ARM_LINKS), 7))
+        for k, i in enumerate(idx):
+            T, pos, quat = self.ctx.ik.frames(dict(zip(names, joints[i].tolist(), strict=True)),
+                                              self._arm_fetch)  # fmt: skip
+            coarse[k, 0, :3] = T[:3, 3]
+            coarse[k, 0, 3:] = _quats(T[None, :3, :3])[0]
+            coarse[k, 1:, :3], coarse[k, 1:, 3:] = pos, quat
+        if len(idx) == 1:
+            out = np.repeat(coarse, n, axis=0)
+            return out[:, 0], out[:, 1:]
+        seg = np.clip(np.searchsorted(idx, np.arange(n), side="right") - 1, 0, len(idx) - 2)
+        s = (np.arange(n) - idx[seg]) / (idx[seg + 1] - idx[seg])
+        a, b = coarse[seg], coarse[seg + 1]  # (n, K, 7)
+        out = np.empty_like(a)
+        out[..., :3] = a[..., :3] + s[:, None, None] * (b[..., :3] - a[..., :3])
+        K = a.shape[1]
+        out[..., 3:] = _slerp(a[..., 3:].reshape(-1, 4), b[..., 3:].reshape(-1, 4),
+                              np.repeat(s, K)).reshape(n, K, 4)  # fmt: skip
+        return out[:, 0], out[:, 1:]
 
     def _stow_commands(
         self, placement: Placement, plan_world: ManipulationWorld | None
@@ -550,20 +588,15 @@ class PlanningTwin:
         pts = timing.polyline(q_end, list(stow))
         T = timing.duration(pts, self.vmax, 0.3)
         qs = timing.samples(pts, T, dt, self.vmax)
-        fixed = dict(zip(BASE_JOINTS, base.tolist(), strict=True))
-        poses = np.array(
-            [self.ctx.ik.forward({**fixed, **dict(zip(ARM_TORSO_JOINTS, q.tolist(), strict=True))})
-             for q in qs]
-        )  # fmt: skip
-        arm = self._arm_poses(np.hstack([np.repeat(base[None], len(qs), axis=0), qs]))
+        tcp, arm = self._fk_along(np.hstack([np.repeat(base[None], len(qs), axis=0), qs]))
         # The hand (its TCP) and the arm (its links' origins and the middles between
         # them) near the cabinet.
         mid = 0.5 * (arm[:, 1:, :3] + arm[:, :-1, :3])
-        points = np.concatenate([poses[:, None, :3, 3], arm[:, :, :3], mid], axis=1)
+        points = np.concatenate([tcp[:, None, :3], arm[:, :, :3], mid], axis=1)
         near = self._near_cabinet(points.reshape(-1, 3)).reshape(len(qs), -1).any(axis=1)
         n = int(np.flatnonzero(near)[-1]) + 2 if near.any() else 1
-        n = min(n, len(poses))
-        return Stow(poses[:n, :3, 3].copy(), _quats(poses[:n, :3, :3]), arm[:n], len(qs) - n)
+        n = min(n, len(tcp))
+        return Stow(tcp[:n, :3].copy(), tcp[:n, 3:].copy(), arm[:n], len(qs) - n)
 
     def _near_cabinet(self, points: np.ndarray) -> np.ndarray:
         """Which ``points`` (n, 3) lie within :data:`STOW_CLEARANCE` of the cabinet's

@@ -145,6 +145,9 @@ def on_stand(model: CabinetModel, stand: float) -> CabinetModel:
     taken as upright (its z along the world's): the shift goes into its height, the
     carcass's height and the parts' rects, joint origins and handles (a part reaching
     below the new bottom is cut there).
+
+    Raises:
+        ConfigError: a part would be cut to less than :class:`PartModel` allows.
     """
     T = np.array(model.T_world_front, dtype=float)
     dz = float(stand - T[2, 3])

@@ -345,14 +345,17 @@ def sample_particles(
                 if not any(_overlaps(m.rect, o.rect) for o in parts):
                     parts.append(m)
                     source.append(i)
-        # The carcass holds every part (a part may reach past the front seen).
+        # The carcass holds every part (a part may reach past the front seen); the
+        # cabinet stands on the table (on_stand below), so a part must reach above it.
         box = (0.5 * front.width + 0.1, front.height + 0.1)
+        dz = scene[2] - float(front.T_world_front[2, 3])
         keep = [
             i
             for i, m in enumerate(parts)
             if max(abs(m.rect[0]), abs(m.rect[1])) <= box[0]
             and m.rect[2] >= -0.1
             and m.rect[3] <= box[1]
+            and m.rect[3] - max(m.rect[2], dz) > 2 * GAP + 0.02
         ]
         parts, source = [parts[i] for i in keep], [source[i] for i in keep]
         # Never smaller than the generator's smallest cabinet (a failed front measurement).
