@@ -4,7 +4,8 @@ Two estimators, picked by the domain's ``discrete_states(states)``
 (:func:`state_entropy`):
 
 * **Discrete states** (``discrete_states`` is True; by default ints, tuples of ints):
-  the categorical entropy of the weight mass on each distinct state [nats].
+  the categorical entropy of the weight mass on each distinct ``entropy_key`` (by
+  default the state) [nats].
 * **Continuous states** (``entropy_features`` gives an ``(N, d)`` float array): the differential
   entropy of a Gaussian with the particles' weighted mean and covariance,
   ``0.5 * log det(2 pi e Sigma)`` [nats], with ``MIN_VARIANCE`` added to the
@@ -60,5 +61,5 @@ def state_entropy(pomdp: GenerativePOMDP, states: Sequence[Any], weights: np.nda
     ``pomdp.entropy_features(states)``."""
     states = list(states)
     if pomdp.discrete_states(states):
-        return particle_entropy(states, weights, None)
+        return particle_entropy([pomdp.entropy_key(s) for s in states], weights, None)
     return particle_entropy(states, weights, pomdp.entropy_features(states))

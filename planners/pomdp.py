@@ -359,6 +359,14 @@ class GenerativePOMDP(ABC):
         """
         return None
 
+    def entropy_key(self, s: Any) -> Hashable:
+        """What the categorical entropy of discrete states tells apart (Entropy
+        Regularized, Active Learning): by default the state itself. A domain whose
+        states carry detail that is not the uncertainty the robot has (e.g. one
+        simulator snapshot per particle, every particle a distinct state) returns the
+        part that is: e.g. the particle's model class."""
+        return s
+
     def entropy_features(self, states: list[Any]) -> np.ndarray | None:
         """Continuous features of ``states`` for entropy estimates, shape ``(N, d)``.
 

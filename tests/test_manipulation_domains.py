@@ -230,3 +230,53 @@ def test_the_open_cell_keeps_its_measured_height_under_the_board_added_above_it(
         lo, hi = c[2] - g.size[2] / 2, c[2] + g.size[2] / 2
         across = abs(c[1]) < 0.25
         assert not (across and lo < ceiling - 1e-6 and hi > floor + 1e-6), (g.name, lo, hi)
+
+
+def test_the_beliefs_entropy_counts_model_classes_not_particles(drawer_episode):
+    """Every particle is a distinct state; the entropy Active Learning and Entropy
+    Regularized see is over the particles' kinematic hypotheses per catalogued part."""
+    from planners.entropy import state_entropy
+
+    d, _, belief = drawer_episode
+    mass: dict = {}
+    for s, w in zip(belief.states, belief.weights / belief.weights.sum(), strict=True):
+        key = d.entropy_key(s)
+        assert len(key) == len(d.parts)
+        for k, part in zip(key, d.parts, strict=True):
+            assert k is None or k in part.hypotheses
+        mass[key] = mass.get(key, 0.0) + w
+    h = -sum(p * np.log(p) for p in mass.values())
+    assert state_entropy(d, belief.states, belief.weights) == pytest.approx(h)
+    assert h < np.log(len(belief.states)) - 1e-9 or len(mass) == len(belief.states)
+
+
+def test_a_drawn_cabinet_without_a_target_gives_way_to_the_next_draw(monkeypatch):
+    """A drawn cabinet with no part the robot opens is replaced by the next draw (the
+    same seed, the same replacement); a cabinet the user chose raises."""
+    from planners.errors import ConfigError
+
+    def first_has_none(d):
+        calls = []
+
+        def choose(world, rng):
+            calls.append(world.config.cabinet_seed)
+            if len(calls) == 1:
+                raise ConfigError("no part the robot can open")
+            return "link_1", np.zeros(3)
+
+        monkeypatch.setattr(d, "_choose_target", choose)
+        return calls
+
+    drawn = []
+    for _ in range(2):
+        d = make_domain("opendrawer")
+        calls = first_has_none(d)
+        d.sample_initial_state(np.random.default_rng(5))
+        assert len(calls) == 2 and d.real.seed == calls[1]
+        drawn.append(calls)
+        d.close()
+    assert drawn[0] == drawn[1]
+    chosen = make_domain("opendrawer", cabinet_seed=SEED)
+    first_has_none(chosen)
+    with pytest.raises(ConfigError, match="no part"):
+        chosen.sample_initial_state(np.random.default_rng(5))

@@ -90,6 +90,25 @@ def test_most_likely_state() -> None:
     assert most_likely_state(ld, b) == 2.0  # nearest to the weighted mean 1.9
 
 
+def test_a_domains_entropy_key_decides_what_the_entropy_and_the_mode_tell_apart() -> None:
+    """States that differ only in detail the domain's ``entropy_key`` drops (here the
+    tens digit) count as one class: the entropy is the classes', and the most likely
+    state is the heaviest state of the heaviest class."""
+    from planners.entropy import state_entropy
+
+    class Classed(type(make_domain("tiger"))):
+        def entropy_key(self, s):
+            return s % 10
+
+    domain = Classed()
+    states, w = [0, 10, 1, 21, 31], np.array([0.2, 0.2, 0.1, 0.3, 0.2])
+    h = -(0.4 * math.log(0.4) + 0.6 * math.log(0.6))
+    assert state_entropy(domain, states, w) == pytest.approx(h)
+    assert state_entropy(make_domain("tiger"), [0, 1], np.ones(2)) == pytest.approx(math.log(2))
+    b = ParticleBelief.from_states(states, w)
+    assert most_likely_state(domain, b) == 21  # class 1 (0.6), its heaviest state
+
+
 def test_a_solved_child_competes_without_exploration() -> None:
     from planners.solvers.action_tree import ActionTree
     from planners.solvers.base import UniformStream

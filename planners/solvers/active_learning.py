@@ -62,12 +62,19 @@ class ActiveLearningConfig(BeliefTreeConfig):
 
 
 def most_likely_state(pomdp: GenerativePOMDP, belief: ParticleBelief) -> Any:
-    """The mode (discrete states) or the particle nearest the weighted mean (continuous)."""
+    """Discrete states: the heaviest particle of the heaviest ``entropy_key`` class (by
+    default: the mode); continuous: the particle nearest the weighted mean."""
     if pomdp.discrete_states(belief.states):
         mass: dict[Any, float] = {}
-        for s, w in zip(belief.states, belief.weights.tolist(), strict=True):
-            mass[s] = mass.get(s, 0.0) + w
-        return max(mass, key=mass.__getitem__)
+        keys = [pomdp.entropy_key(s) for s in belief.states]
+        for k, w in zip(keys, belief.weights.tolist(), strict=True):
+            mass[k] = mass.get(k, 0.0) + w
+        best = max(mass, key=mass.__getitem__)
+        heaviest: dict[Any, float] = {}  # equal states pool their weight, as in the mode
+        for s, k, w in zip(belief.states, keys, belief.weights.tolist(), strict=True):
+            if k == best:
+                heaviest[s] = heaviest.get(s, 0.0) + w
+        return max(heaviest, key=heaviest.__getitem__)
     features = pomdp.entropy_features(belief.states)
     mean = belief.weights @ features
     return belief.states[int(np.argmin(((features - mean) ** 2).sum(axis=1)))]

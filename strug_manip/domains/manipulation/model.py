@@ -99,6 +99,10 @@ EPISODE_SEEDS = range(6_000, 10_000)
 VIEWS = 4
 #: Steps per episode (the paper's).
 MAX_STEPS = 10
+#: A drawn cabinet with no part the full robot opens (fills, on Shelf) gives way to the
+#: next draw, at most this many times: an episode is about the task, not about the
+#: generator's rare cabinets whose parts are all out of the arm's reach.
+MAX_DRAWS = 20
 #: Particles drawn from perception (the runner's ``n_particles`` is capped to this:
 #: every particle is a compiled world and a twin).
 MAX_PARTICLES = 24
@@ -186,6 +190,7 @@ class ManipulationPOMDP(GenerativePOMDP):
         self.real: RealEpisode | None = None
         self.worlds: ParticleWorlds | None = None
         self.parts: tuple[CataloguePart, ...] = ()
+        self._classes: tuple[tuple[str | None, ...], ...] = ()
         self.targets: tuple[str | None, ...] = ()
         self._belief: ParticleBelief | None = None
         self.timers = Timers()
@@ -198,6 +203,21 @@ class ManipulationPOMDP(GenerativePOMDP):
 
     def discrete_states(self, states: list[Any]) -> bool:
         return True  # finitely many, compared by value (ManipState)
+
+    def entropy_key(self, s: Any) -> Hashable:
+        """The model class of ``s``'s particle: per catalogued part, the kinematic
+        hypothesis it holds for it (None: it has no such part, or an open cell, empty
+        space in which nothing moves: no probe tells it from its absence). Every
+        particle is a distinct state (its own geometry, its own simulator snapshot), so
+        the entropy of the states would be the log of their number however sure the
+        robot is of what matters to a skill; the classes are what probes can tell
+        apart."""
+        return self._classes[s.origin] if s.origin >= 0 else None
+
+    def _movable_kind(self, i: int, part: CataloguePart) -> str | None:
+        link = part.links[i]
+        kind = None if link is None else part_kind(self._need_worlds().particles[i].spec.part(link))
+        return None if kind == "shelf" else kind
 
     def observation_key(self, o: Any) -> Hashable:
         return o.key
@@ -246,13 +266,21 @@ class ManipulationPOMDP(GenerativePOMDP):
         """A new real cabinet and its target (module docstring)."""
         self.close()
         t0 = time.perf_counter()
-        seed = self.cabinet_seed
-        if seed is None:
-            seed = EPISODE_SEEDS.start + int(rng.integers(len(EPISODE_SEEDS)))
-        world = ManipulationWorld(
-            SceneConfig(cabinet_seed=seed, cabinet_kinds=TASK_KINDS[self.task])
-        )
-        target, point = self._choose_target(world, rng)
+        drawn = self.cabinet_seed is None and self.target is None
+        for attempt in range(MAX_DRAWS if drawn else 1):
+            seed = self.cabinet_seed
+            if seed is None:
+                seed = EPISODE_SEEDS.start + int(rng.integers(len(EPISODE_SEEDS)))
+            world = ManipulationWorld(
+                SceneConfig(cabinet_seed=seed, cabinet_kinds=TASK_KINDS[self.task])
+            )
+            try:
+                target, point = self._choose_target(world, rng)
+                break
+            except ConfigError:
+                world.close()
+                if not drawn or attempt == MAX_DRAWS - 1:
+                    raise
         world.reset()
         self.real = RealEpisode(world, seed, target, point, [], [])
         self.timers = Timers(setup=time.perf_counter() - t0)
@@ -285,6 +313,8 @@ class ManipulationPOMDP(GenerativePOMDP):
             [p.spec for p in particles], [p.q for p in particles], poses, TASK_KINDS[self.task]
         )
         self.targets = tuple(self._target_link(i, real.point) for i in range(len(w)))
+        self._classes = tuple(tuple(self._movable_kind(i, p) for p in self.parts)
+                              for i in range(len(w)))  # fmt: skip
         self._space = self._make_space(action_list(self.parts, self.task, self.probes))
         self.timers.setup += time.perf_counter() - t0
         belief = ParticleBelief.from_states([ManipState(i, w.initial[i], 0) for i in range(len(w))])
