@@ -361,22 +361,39 @@ def _manipulation_demo(args: argparse.Namespace) -> int:
     config = solver_config("strug", budget_for("opendrawer", {}))
     print(f"demo: opendrawer / strug / seed 0: {describe_config(config, pomdp)}")
     recorder = RerunRecorder(rrd, pomdp)
+    truth: list = []  # the real state after every step
+
+    def record(rec, belief, state) -> None:
+        recorder(rec, belief, state)
+        truth.append(state)
+
     try:
         result = run_episode(
             pomdp, config, 0, n_particles=DEFAULT_PARTICLES,
-            on_step=lambda rec: _show_step(rec, False), recorder=recorder,
+            on_step=lambda rec: _show_step(rec, False), recorder=record,
         )  # fmt: skip
     finally:
         recorder.close()
     real = pomdp.real
     labels = ["start", *(f"{r.step}: {r.action}" for r in result.steps)]
     frames = [real.frames[0], *real.frames[pomdp.views :]]
-    episode_strip([f.rgb for f in frames], png, [textwrap.shorten(x, 38) for x in labels])
+    short = [textwrap.shorten(x, 38) for x in labels]
+    episode_strip([f.rgb for f in frames], png, short)
+    # The same steps from the overview camera: the robot and the cabinet, as the
+    # recording's 3D view shows them.
+    overview = png.with_name(png.stem + "_overview.png")
+    world = real.world
+    shots = []
+    for state in truth:
+        world.restore(state.sim)
+        shots.append(world.render_rgb("overview"))
+    episode_strip(shots, overview, short[1:])
     print(f"cabinet seed {real.seed}, target {real.target}: {pomdp.report()}")
     pomdp.close()
     print(
         f"discounted return: {result.discounted_return:+.3f} ({len(result.steps)} steps, "
-        f"{result.seconds:.1f} s); wrote {rrd} (open with: rerun {rrd}) and {png}.\n"
+        f"{result.seconds:.1f} s); wrote {rrd} (open with: rerun {rrd}), {png} and "
+        f"{overview}.\n"
         "The toy columns of Table I in a few minutes: strug demo --toy"
     )
     return 0
