@@ -107,3 +107,37 @@ def test_an_unreachable_line_is_ik_infeasible(world, ctx) -> None:
     assert stop.value.status is Status.IK_INFEASIBLE
     assert "lift line unreachable" in stop.value.detail
     assert search(ctx, world, SkillPlan("Reach", pre, ())).lines == ()
+
+
+def test_a_hint_from_a_similar_plan_is_tried_first_and_taken_if_it_works(world, ctx) -> None:
+    """The twins' placement hints: a search given the hint of a plan centimetres away
+    takes its candidate in one try, tracking every line; the store hands a hint only to
+    the same skill from the same base with a work point within HINT_RADIUS."""
+    from strug_manip.control.placement import HINT_RADIUS, PlacementHints
+
+    world.reset()
+    plan = drawer_plan(world)
+    full = search(ctx, world, plan)
+    hints = PlacementHints()
+    hints.put(plan, np.zeros(3), full)
+    shift = np.eye(4)
+    shift[1, 3] = 0.02  # the same drawer as another particle has it, 2 cm aside
+    near = SkillPlan(plan.skill, shift @ plan.pre, tuple(
+        p if not hasattr(p, "poses") else type(p)(**{**p.__dict__, "poses": shift @ p.poses})
+        for p in plan.phases))  # fmt: skip
+    hint = hints.get(near, np.zeros(3))
+    assert hint is not None and hint.candidate == full.candidate
+    checker = ctx.checker(world.model).load(world.data)
+    checker.attach(None)
+    checker.allow()
+    speeds = (speed_limits(ctx.ik.model), np.array(BASE_SPEED))
+    postures = (np.array(TUCK), np.array(TUCK))
+    p = find_placement(near, ctx.ik, ctx.wb_ik, np.zeros(3), postures, speeds, checker, hint)
+    assert p.tried == 1 and p.candidate == full.candidate
+    for k, line in enumerate(p.plan.lines):
+        assert close(gripper_at(ctx, *p.start_of(k + 1)), line.poses[-1])  # where it ends
+    far = np.eye(4)
+    far[1, 3] = 2 * HINT_RADIUS
+    assert hints.get(SkillPlan(plan.skill, far @ plan.pre, ()), np.zeros(3)) is None
+    assert hints.get(near, np.array([0.5, 0.0, 0.0])) is None  # another base
+    assert hints.get(SkillPlan("Push", near.pre, near.phases), np.zeros(3)) is None

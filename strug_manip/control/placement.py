@@ -128,7 +128,7 @@ class Hint(NamedTuple):
 
 class PlacementHints:
     """Which candidate worked for recent plans, to try first for a similar plan
-    (``find_placement(first=...)``): the same skill, carrying or not, from the same base
+    (``find_placement(like=...)``): the same skill, carrying or not, from the same base
     pose (to 1 cm, 0.02 rad), its work point within :data:`HINT_RADIUS`."""
 
     def __init__(self) -> None:
