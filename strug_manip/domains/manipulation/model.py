@@ -214,9 +214,12 @@ class ManipulationPOMDP(GenerativePOMDP):
         apart."""
         return self._classes[s.origin] if s.origin >= 0 else None
 
-    def _movable_kind(self, i: int, part: CataloguePart) -> str | None:
-        link = part.links[i]
-        kind = None if link is None else part_kind(self._need_worlds().particles[i].spec.part(link))
+    def _movable_kind(self, i: int, k: int) -> str | None:
+        """Particle ``i``'s hypothesis for catalogued part ``k`` (None: it has no such
+        part, or an open cell)."""
+        if self.parts[k].links[i] is None:
+            return None
+        kind = self._own_kind(i, k)
         return None if kind == "shelf" else kind
 
     def observation_key(self, o: Any) -> Hashable:
@@ -313,7 +316,7 @@ class ManipulationPOMDP(GenerativePOMDP):
             [p.spec for p in particles], [p.q for p in particles], poses, TASK_KINDS[self.task]
         )
         self.targets = tuple(self._target_link(i, real.point) for i in range(len(w)))
-        self._classes = tuple(tuple(self._movable_kind(i, p) for p in self.parts)
+        self._classes = tuple(tuple(self._movable_kind(i, k) for k in range(len(self.parts)))
                               for i in range(len(w)))  # fmt: skip
         self._space = self._make_space(action_list(self.parts, self.task, self.probes))
         self.timers.setup += time.perf_counter() - t0
