@@ -31,6 +31,21 @@ centimetres to decimetres away. ``sigma`` is set to the size of that irreducible
 error, about 1 cm (the figures measured by ``tools/eval_likelihood.py`` are in the
 README): with 1e-3 m a 5 mm board error alone would be a 12.5-nat penalty and one
 particle would take all the weight after any observation.
+
+**Heavy tails** (:data:`NU` = 4, a Student-t in ``H / sigma`` instead of the paper's
+Gaussian): the model error is not always about 1 cm. A part perception missed or
+hallucinated (a door believed where the cabinet has an open cell) puts *every*
+particle several centimetres off, and then a Gaussian turns differences between
+wrong models into tens of nats: on a held-out shelf (cabinet 9032) all 24 particles
+were 4.5-13 cm off after a Pick that moved nothing, and the Gaussian gave one of them
+99 % of the weight (an effective sample size of 1.0) on a cloud that said nothing
+new. A Student-t with ``nu`` degrees of freedom keeps the Gaussian's core
+(``nu -> inf`` is the Gaussian) and makes a 1 cm difference far out in the tail
+cost about a nat, not tens; the same cloud leaves an effective sample size of 10.6.
+It ranks the particles exactly as the Gaussian does (both fall monotonically in
+``H``), so ``tools/eval_likelihood.py``'s rankings are unchanged; after a probe the
+right belief (``H`` about 9 mm) gains 1.1 nats over the best wrong one (19 mm)
+instead of 1.4.
 """
 
 from __future__ import annotations
@@ -47,6 +62,8 @@ from perception.errors import BadInputError
 QUANTILE = 0.8
 #: Observation noise of H [m] (module docstring).
 SIGMA = 0.01
+#: Degrees of freedom of the Student-t in ``H / sigma`` (module docstring; inf: Gaussian).
+NU = 4.0
 #: Voxel size of the thinning [m].
 VOXEL = 0.01
 #: Separation of the particles' slabs in the fourth coordinate [m].
@@ -111,10 +128,22 @@ def log_likelihood(
     predicted: Sequence[np.ndarray],
     sigma: float = SIGMA,
     quantile: float = QUANTILE,
+    nu: float = NU,
 ) -> np.ndarray:
-    """``log N(H; 0, sigma^2)`` per predicted cloud, (M,) (``H`` from
-    :func:`quantile_hausdorff`)."""
+    """The log density of ``H`` (:func:`quantile_hausdorff`) per predicted cloud, (M,):
+    a Student-t with ``nu`` degrees of freedom and scale ``sigma`` [m] (the module
+    docstring), ``log N(H; 0, sigma^2)`` for ``nu = inf``."""
     if not (isinstance(sigma, int | float) and math.isfinite(sigma) and sigma > 0):
         raise BadInputError(f"sigma must be a finite number > 0 [m], got {sigma!r}")
-    h = quantile_hausdorff(observed, predicted, quantile)
-    return -0.5 * (h / sigma) ** 2 - math.log(sigma * math.sqrt(2.0 * math.pi))
+    if not (isinstance(nu, int | float) and nu > 0 and not math.isnan(nu)):
+        raise BadInputError(f"nu must be a number > 0 (inf: Gaussian), got {nu!r}")
+    z2 = (quantile_hausdorff(observed, predicted, quantile) / sigma) ** 2
+    if math.isinf(nu):
+        return -0.5 * z2 - math.log(sigma * math.sqrt(2.0 * math.pi))
+    norm = (
+        math.lgamma(0.5 * (nu + 1.0))
+        - math.lgamma(0.5 * nu)
+        - 0.5 * math.log(nu * math.pi)
+        - math.log(sigma)
+    )
+    return norm - 0.5 * (nu + 1.0) * np.log1p(z2 / nu)
