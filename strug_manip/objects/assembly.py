@@ -36,6 +36,7 @@ import numpy as np
 
 from planners.errors import ConfigError
 from strug_manip.objects.generator import (
+    GRAVITY,
     METAL_DENSITY,
     SEMANTICS,
     CabinetSpec,
@@ -86,6 +87,14 @@ class PartModel:
         handle: ``bar`` or ``none``; handle_pos: the grasp point (3,) [m] with the part
             closed, or None for the default (the generator's spot).
         damping: [N s/m] or [N m s/rad]; friction: [N] or [N m].
+        stay: a top- or bottom-hinged flap's friction stay, as the generator fits one
+            (:data:`~strug_manip.objects.generator.FLAP_STAY_HOLD`): the joint's
+            friction is then ``stay`` times the assembled flap's gravity torque when
+            horizontal (its mass and lever are known only once it is built), and
+            ``friction`` is ignored; None: ``friction`` as given. Without a stay a
+            flap believed bottom-hinged, its axis a few degrees off level as
+            perception leaves it, falls open under its own weight in the planning
+            twin (and a model predicts a cabinet that changes on its own).
     """
 
     kind: str
@@ -99,6 +108,7 @@ class PartModel:
     handle_pos: np.ndarray | None = None
     damping: float = 0.0
     friction: float = 0.0
+    stay: float | None = None
 
     def __post_init__(self) -> None:
         if self.kind not in KINDS:
@@ -110,6 +120,13 @@ class PartModel:
             raise ConfigError(f"a door needs hinge in {SIDES}, got {self.hinge!r}")
         if self.kind in ("drawer", "door") and not self.upper > 0:
             raise ConfigError(f"a movable part needs upper > 0, got {self.upper!r}")
+        if self.stay is not None and not (
+            self.kind == "door" and self.hinge in ("top", "bottom") and self.stay > 0
+        ):
+            raise ConfigError(
+                f"a stay (> 0) is for a top- or bottom-hinged door, got stay={self.stay!r} "
+                f"on a {self.kind} hinged {self.hinge!r}"
+            )
 
 
 @dataclass(frozen=True)
@@ -357,6 +374,10 @@ def assemble(
         geoms_o = [moved(g, R @ np.asarray(g.pos) - np.asarray(g.pos)) for g in geoms]
         movable = p.kind in ("drawer", "door")
         y0, y1, z0, z1 = p.rect
+        inertial = _inertial(geoms_o, densities)
+        friction = float(p.friction) if movable else 0.0
+        if p.stay is not None:  # as the generator fits one (lever: hinge to centre of mass)
+            friction = p.stay * inertial.mass * GRAVITY * abs(float(inertial.com[2]))
         spec = PartSpec(
             link=f"link_{n}",
             joint=f"joint_{n}",
@@ -374,7 +395,7 @@ def assemble(
             lower=0.0,
             upper=float(p.upper) if movable else 0.0,
             damping=float(p.damping) if movable else 0.0,
-            friction=float(p.friction) if movable else 0.0,
+            friction=friction,
             hinge=p.hinge if p.kind == "door" else None,
             handle=p.handle if movable else "none",
             handle_pos=point(grasp) if grasp is not None else None,
@@ -384,7 +405,7 @@ def assemble(
             interior_center=point(ic) if ic is not None else None,
             interior_size=isize,
             geoms=tuple(geoms_o),
-            inertial=_inertial(geoms_o, densities),
+            inertial=inertial,
         )
         parts.append(spec)
         if movable:

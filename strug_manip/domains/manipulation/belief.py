@@ -31,7 +31,9 @@ per part; defaults in :class:`BeliefConfig`):
 
 Limits, damping and friction cannot be seen: they are drawn from the generator's
 documented ranges (:mod:`strug_manip.objects.generator`), limits never below the
-opening seen. Particles depend only on perception's outputs and the generator's
+opening seen; a flap (a door hinged top or bottom) gets the generator's friction stay
+(:attr:`~strug_manip.objects.assembly.PartModel.stay`), so that it stays where it is
+unless pushed. Particles depend only on perception's outputs and the generator's
 documented ranges, never on a true cabinet.
 """
 
@@ -255,13 +257,12 @@ def _draw_part(
     handle = _closed_handle(h, "door", axis, origin, q)
     if handle is not None and side in ("left", "right") and not (y0 <= handle[1] <= y1):
         handle = None  # the seen handle does not fit this interpretation's panel
-    if side == "bottom" and handle is not None:
-        damping, friction = float(rng.uniform(*gen.DOOR_DAMPING)), float(rng.uniform(1.0, 4.0))
-    else:
-        damping, friction = (
-            float(rng.uniform(*gen.DOOR_DAMPING)),
-            float(rng.uniform(*gen.DOOR_FRICTION)),
-        )
+    damping, friction = (
+        float(rng.uniform(*gen.DOOR_DAMPING)),
+        float(rng.uniform(*gen.DOOR_FRICTION)),
+    )
+    # A flap has a friction stay, as the generator fits one (PartModel.stay).
+    stay = float(rng.uniform(*gen.FLAP_STAY_HOLD)) if side in ("top", "bottom") else None
     return [
         PartModel(
             "door",
@@ -275,6 +276,7 @@ def _draw_part(
             handle,
             damping,
             friction,
+            stay,
         )
     ]
 
