@@ -82,6 +82,11 @@ def test_unknown_actions_are_refused_and_steps_are_cached(drawer_episode):
     assert d.worlds.outcomes.hits == hits + 1
     assert first.state == again.state and first.obs.key == again.obs.key
     assert isinstance(first.obs, ManipObservation) and first.obs.cloud is None
+    # A twin that holds the object cannot pick (one hand), and nothing changes.
+    assert first.obs.key[1] == 1.0, first.obs.summary
+    twice = d.step(first.state, a, rng)
+    assert twice.state.sim == first.state.sim and twice.reward == 0.0
+    assert "not_applicable" in twice.obs.summary
 
 
 def _record(domain: str, solver: str, seed: int, **kw) -> list[tuple]:
@@ -280,3 +285,41 @@ def test_a_drawn_cabinet_without_a_target_gives_way_to_the_next_draw(monkeypatch
     first_has_none(chosen)
     with pytest.raises(ConfigError, match="no part"):
         chosen.sample_initial_state(np.random.default_rng(5))
+
+
+def test_a_believed_flap_has_a_friction_stay_and_stays_shut():
+    """A bottom-hinged flap that perception sees 0.15 rad open (a few degrees past
+    its balance over the hinge): without a stay it falls open under its own weight
+    within two seconds; with the generator's
+    stay (``PartModel.stay``) it holds, and its friction is the stay's multiple of its
+    gravity torque when horizontal."""
+    import mujoco
+
+    from strug_manip.objects.assembly import CabinetModel, PartModel, assemble
+    from strug_manip.world.sim import ManipulationWorld
+
+    axis = np.array([0.0, 1.0, 0.0])
+    rect = (-0.25, 0.25, 0.05, 0.40)
+
+    def fall(stay: float | None) -> tuple[float, float]:
+        flap = PartModel("door", rect, axis, np.array([0.0, 0.0, 0.052]), "bottom", 1.4,
+                         q=0.15, damping=0.1, friction=0.1, stay=stay)  # fmt: skip
+        spec, q = assemble(CabinetModel(0.6, 0.5, 0.4, (flap,), _standing_front(0.5)))
+        part = spec.movable_parts[0]
+        w = ManipulationWorld.from_cabinet_spec(spec)
+        try:
+            w.reset()
+            joint = w.scene.cabinet_prefix + part.joint
+            w.set_parts({joint: q[part.joint]})
+            for _ in range(round(2.0 / w.model.opt.timestep)):
+                mujoco.mj_step(w.model, w.data)
+            return abs(w.part_positions()[joint] - q[part.joint]), part.friction
+        finally:
+            w.close()
+
+    fell, _ = fall(None)
+    held, friction = fall(1.5)
+    assert fell > 0.5 and held < 0.02, (fell, held)
+    assert friction > 10 * 0.1
+    with pytest.raises(ConfigError, match="stay"):
+        PartModel("drawer", rect, np.array([1.0, 0.0, 0.0]), np.zeros(3), upper=0.3, stay=1.5)

@@ -36,7 +36,8 @@ def outcome(**kw) -> Outcome:
 
 def test_statuses_are_an_enum_in_the_documented_order() -> None:
     assert STATUSES == (
-        "ok", "ik_infeasible", "no_motion_plan", "grasp_lost", "collision", "timeout"
+        "ok", "ik_infeasible", "no_motion_plan", "grasp_lost", "collision", "timeout",
+        "cabinet_moved",
     )  # fmt: skip
     assert Status("grasp_lost") is Status.GRASP_LOST and Status.OK == "ok"
     with pytest.raises(ValueError):

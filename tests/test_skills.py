@@ -489,6 +489,12 @@ def test_open_pick_place_chain_puts_the_object_inside(worlds, ctx, cabinet, link
     assert tgt.grasp == ("top" if part.joint_type == "prismatic" else "side")
     pick = run(Pick("object", tgt.grasp))
     assert pick.holding
+    # One hand: nothing that grasps runs while it holds the object, and nothing moves.
+    held = world.snapshot()
+    for skill in (Pick("object", tgt.grasp), opening(BelievedJoint.of_part(part, 0.0, T), g)):
+        with pytest.raises(ConfigError, match=f"{skill.name} needs an empty gripper"):
+            skill.run(world, ctx=ctx)
+        assert world.snapshot() == held
     place = run(Place("object", tgt.p, tgt.lift))
     # The task's verdict, from the world: inside the part, let go, the cabinet in place.
     assert inside(spec, link, world.part_positions()[j], cabinet_pose(world), world.object_pose())
@@ -790,3 +796,19 @@ def test_an_unreachable_grasp_is_ik_infeasible_and_nothing_moves(worlds, ctx) ->
     assert out.status is Status.IK_INFEASIBLE and out.sim_time == 0.0, out.summary()
     assert world.snapshot() == before
     assert "no base pose" in out.detail and out.phase == "plan"
+
+
+def test_a_pull_that_slides_the_cabinet_stops_there(sample) -> None:
+    """The cabinet-motion guard: a run stopped ``cabinet_moved`` did slide the cabinet
+    past ``cabinet_motion_limit``; no run under the right model is stopped; and the
+    twin, predicting the same plans, stops the same runs."""
+    limit = SkillParams().cabinet_motion_limit
+    stopped = [r for r in sample if r.out.status is Status.CABINET_MOVED]
+    assert stopped, "no run of the sample slid the cabinet"
+    for r in stopped:
+        assert r.belief not in ("", r.model), (r.cabinet, r.link, r.belief)
+        assert r.displacement > limit, (r.cabinet, r.link, r.belief, r.displacement)
+    alike = [r for r in stopped if r.twin.status is Status.CABINET_MOVED]
+    assert len(alike) >= 0.8 * len(stopped), (len(alike), len(stopped))
+    # The recovery after the stop is guarded too: no single pull drags the cabinet off.
+    assert max(r.displacement for r in sample) < 3 * limit

@@ -235,7 +235,7 @@ class FullRobot:
         self.ik_seconds = self.plan_seconds = 0.0
         self.n_plans = 0
         parts0 = self.world.part_positions()
-        cab0 = self.world.cabinet_displacement_vector()
+        cab0 = self._cab0 = self.world.cabinet_displacement_vector()
         phase = "plan"
         try:
             # Whether this skill carries the object (a stop keeps holding it then).
@@ -293,15 +293,27 @@ class FullRobot:
             base = self.drv.base
             backs_off = not checker.path([np.concatenate([base, q]) for q in track.q])
             checker.allow()
-        if backs_off:
-            self.drv.follow(list(track.q), max(0.3, length / p.retreat_speed))
-            self.drv.hold(p.settle_time)
-        goal = self._drive_posture(carrying)
+        # A recovery that slides the cabinet (an arm stowed through a part that is not
+        # where the robot believes it) stops where it is, as a skill does.
+        ref = self.world.cabinet_displacement_vector()
+
+        def monitor(_: float) -> None:
+            self._check_slide(ref, "recovery")
+
         try:
-            path = self._plan_arm(self.drv.q, goal, carrying, phase="recovery")
+            if backs_off:
+                self.drv.follow(list(track.q), max(0.3, length / p.retreat_speed), monitor=monitor)
+                self.drv.hold(p.settle_time)
+            goal = self._drive_posture(carrying)
+            try:
+                path = self._plan_arm(self.drv.q, goal, carrying, phase="recovery")
+            except SkillStop as stop:
+                return f"; recovery: the arm stays out ({stop.detail})"
+            self.drv.follow(list(path), 0.3, monitor=monitor)
         except SkillStop as stop:
-            return f"; recovery: the arm stays out ({stop.detail})"
-        self.drv.follow(list(path), 0.3)
+            self.drv.arm_cmd = self.drv.q
+            self.drv.hold(p.settle_time)
+            return f"; recovery: the arm stopped where it was ({stop.detail})"
         self.drv.hold(p.settle_time)
         return "" if backs_off else "; recovery: no free IK path to back off, stowed from there"
 
@@ -479,9 +491,10 @@ class FullRobot:
             self.plan_world.set_parts({line.part_joint: float(line.part_q[-1])})
 
     def _line_monitor(self, line: Line | None) -> Callable[[float], None]:
-        """Stops a motion when the grasp of ``line`` is lost (if it holds something) or
-        the gripper lags more than the tracking tolerance behind its command (None: a
-        free motion)."""
+        """Stops a motion when the grasp of ``line`` is lost (if it holds something),
+        the cabinet has slid more than ``cabinet_motion_limit`` since the skill started,
+        or the gripper lags more than the tracking tolerance behind its command (None:
+        a free motion)."""
         m, d = self.world.model, self.world.data
         tendon = m.tendon("gripper").id
         site = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, GRIPPER_SITE)
@@ -493,6 +506,7 @@ class FullRobot:
         def monitor(_: float) -> None:
             if line is not None and line.holding and float(d.ten_length[tendon]) < FINGERS_EMPTY:
                 raise SkillStop(Status.GRASP_LOST, f"the fingers closed on nothing ({name})")
+            self._check_slide(self._cab0, name)
             cmd = self.ctx.ik.forward(self._command())
             lag = float(np.linalg.norm(cmd[:3, 3] - d.site_xpos[site]))
             if lag > tol:
@@ -501,6 +515,13 @@ class FullRobot:
                 )
 
         return monitor
+
+    def _check_slide(self, ref: np.ndarray, name: str) -> None:
+        """Stop (``cabinet_moved``) when the cabinet base is more than
+        ``cabinet_motion_limit`` from ``ref`` (a displacement vector (2,) [m])."""
+        slid = float(np.linalg.norm(self.world.cabinet_displacement_vector() - ref))
+        if slid > self.params.cabinet_motion_limit:
+            raise SkillStop(Status.CABINET_MOVED, f"the cabinet slid {slid:.3f} m ({name})")
 
     def _command(self) -> dict[str, float]:
         return {

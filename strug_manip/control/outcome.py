@@ -40,6 +40,8 @@ class Status(StrEnum):
     GRASP_LOST = "grasp_lost"
     COLLISION = "collision"
     TIMEOUT = "timeout"
+    #: The cabinet slid more than ``SkillParams.cabinet_motion_limit`` during the skill.
+    CABINET_MOVED = "cabinet_moved"
 
 
 #: Every status, as strings (the order above).

@@ -80,6 +80,15 @@ class SkillParams:
             well under a centimetre at probe speed.
         free_tolerance: the same for free motions [m]: there a fast arm lags a few
             centimetres behind its command, and only a blocked one falls far behind.
+        cabinet_motion_limit: the cabinet's base more than this from where it stood
+            when the skill started (horizontally) stops the skill (status
+            ``cabinet_moved``) [m]: a part that does not move the way the robot
+            believes (a door opened about the wrong hinge, a drawer pulled as a door)
+            holds the hand back by the whole cabinet, which slides on its table
+            before the arm falls the tracking tolerance behind. An opening under the
+            right model moves it by millimetres, a top flap lifted open by up to 2 cm
+            (README): 3 cm leaves room for that and still stops a wrong pull at a
+            third of the 0.1 m at which the task counts the cabinet dragged.
         time_budget: simulated time budget of one skill [s].
         plan_timeout: OMPL time budget per arm motion and planner [s] (wall): an arm
             reaching into a low drawer with the object is a narrow passage that
@@ -115,6 +124,7 @@ class SkillParams:
     tracking_tolerance: float = 0.08
     probe_tolerance: float = 0.02
     free_tolerance: float = 0.2
+    cabinet_motion_limit: float = 0.03
     time_budget: float = 60.0
     plan_timeout: float = 4.0
     drive_tolerance: float = 0.02

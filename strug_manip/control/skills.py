@@ -47,7 +47,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Literal
+from typing import ClassVar, Literal
 
 import numpy as np
 
@@ -85,6 +85,10 @@ GRASPS: tuple[str, ...] = ("top", "side")
 class Skill:
     """Shared behaviour of the skills: plan, then run (full robot) or simulate (twin)."""
 
+    #: The skill closes the fingers on something (a handle, the object), so it needs an
+    #: empty gripper: the Fetch has one hand. ``Place`` carries what it holds instead.
+    grasps: ClassVar[bool] = True
+
     def plan(self, world: ManipulationWorld, params: SkillParams = DEFAULT_PARAMS) -> SkillPlan:
         """The skill's gripper motions against ``world`` (the believed one)."""
         raise NotImplementedError
@@ -108,10 +112,13 @@ class Skill:
         against ``plan_world`` (default ``world``; e.g. the believed cabinet).
 
         Raises:
-            ConfigError, UnknownNameError: bad parameters (before anything moves).
+            ConfigError, UnknownNameError: bad parameters, or a grasping skill with
+                the object already in the gripper (:meth:`check_hand`; before anything
+                moves).
         """
         # The robot first: it checks the worlds and the seed before anything is planned.
         robot = FullRobot(world, ctx, params, plan_world=plan_world, seed=seed, observer=observer)
+        self.check_hand(world)
         pw = robot.plan_world
         if pw is not world:
             pw.copy_robot_state(world)
@@ -132,8 +139,16 @@ class Skill:
             raise ConfigError(f"twin must be a PlanningTwin, got {twin!r}")
         if plan_world is not None and not isinstance(plan_world, ManipulationWorld):
             raise ConfigError(f"plan_world must be a ManipulationWorld or None, got {plan_world!r}")
+        self.check_hand(twin.world)
         pw = twin.world if plan_world is None else plan_world
         return twin.run(self.plan(pw, params), plan_world)
+
+    def check_hand(self, world: ManipulationWorld) -> None:
+        """Raise :class:`ConfigError` when the skill grasps (:attr:`grasps`) and the
+        gripper of ``world`` (where physics runs, not the believed world) already holds
+        the object: it would close on nothing, or knock the object out."""
+        if self.grasps and holds_object(world):
+            raise ConfigError(f"{self.name} needs an empty gripper; it holds the object")
 
 
 # --- helpers --------------------------------------------------------------------------
@@ -490,6 +505,7 @@ class Place(Skill):
     o: str
     p: np.ndarray
     lift: float = 0.0
+    grasps: ClassVar[bool] = False
 
     def plan(self, world: ManipulationWorld, params: SkillParams = DEFAULT_PARAMS) -> SkillPlan:
         _check_object(self.o)

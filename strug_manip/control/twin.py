@@ -228,6 +228,10 @@ class PlanningTwin:
             n = 6 if m.jnt_type[jid] == mujoco.mjtJoint.mjJNT_FREE else 1
             dofs.append(np.arange(m.jnt_dofadr[jid], m.jnt_dofadr[jid] + n))
         self._cabinet_dofs = np.concatenate(dofs)
+        free = m.joint(self.world.scene.cabinet_prefix + "free").id
+        self._cabinet_xy = int(m.jnt_qposadr[free])  # its body's x, y in qpos
+        #: Where the cabinet stood (x, y) [m] when the current skill started.
+        self.cabinet_xy0 = np.zeros(2)
         self.reset()
 
     # -- state -------------------------------------------------------------------------
@@ -684,10 +688,13 @@ class PlanningTwin:
 
     def judge(self, prog: Program, states: np.ndarray) -> tuple[int, Status, str, str]:
         """The first step whose monitors stop the run (a lost grasp where the fingers
-        should hold, the hand more than the tracking tolerance behind its command,
+        should hold, the cabinet slid more than ``cabinet_motion_limit`` since the
+        skill started, the hand more than the tracking tolerance behind its command,
         checked every 10 ms as on the full robot) and why; the last step if none."""
         m = self.world.model
         qpos = states[:, 1 : 1 + m.nq]
+        xy = qpos[:, self._cabinet_xy : self._cabinet_xy + 2]
+        slid = np.linalg.norm(xy - self.cabinet_xy0, axis=1)
         fingers = 0.5 * (qpos[:, self._fingers[0]] + qpos[:, self._fingers[1]])
         tcp = qpos[:, self._slide_adr] + TCP_OFFSET * _x_axes(
             qpos[:, self._ball_adr : self._ball_adr + 4]
@@ -699,14 +706,19 @@ class PlanningTwin:
         check[prog.phase_ends] = True
         check[-1] = True
         lost = check & prog.held & (fingers < FINGERS_EMPTY)
+        moved = check & (slid > self.params.cabinet_motion_limit)
         blocked = check & (lag > prog.tol)
         blocked &= ~prog.holds | np.r_[prog.holds[1:] != prog.holds[:-1], False]
-        stops = np.flatnonzero(lost | blocked)
+        stops = np.flatnonzero(lost | moved | blocked)
         if not len(stops):
             return len(lag) - 1, Status.OK, "", ""
         k = int(stops[0])
         if lost[k]:
             return (k, Status.GRASP_LOST, f"the fingers closed on nothing ({prog.names[k]})",
+                    str(prog.names[k]))  # fmt: skip
+        if moved[k]:
+            return (k, Status.CABINET_MOVED,
+                    f"the cabinet slid {slid[k]:.3f} m ({prog.names[k]})",
                     str(prog.names[k]))  # fmt: skip
         return (k, Status.COLLISION,
                 f"the gripper is held back {lag[k]:.3f} m from its path ({prog.names[k]})",
@@ -1106,6 +1118,7 @@ def run_batch(
         w = tw.world
         tw.t0 = float(w.data.time)
         tw._before = (w.part_positions(), w.cabinet_displacement_vector())
+        tw.cabinet_xy0 = w.data.qpos[tw._cabinet_xy : tw._cabinet_xy + 2].copy()
         tw._t_wall = t_wall
         try:
             prog = tw.program(plan, plan_world)
