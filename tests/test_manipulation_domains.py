@@ -323,3 +323,54 @@ def test_a_believed_flap_has_a_friction_stay_and_stays_shut():
     assert friction > 10 * 0.1
     with pytest.raises(ConfigError, match="stay"):
         PartModel("drawer", rect, np.array([1.0, 0.0, 0.0]), np.zeros(3), upper=0.3, stay=1.5)
+
+
+def test_a_cloud_of_an_unchanged_cabinet_is_weighed_once(drawer_episode):
+    """The first real cloud is news; after a step that moved nothing (a Pick with the
+    object in hand is not applicable) the cloud shows the same cabinet and the belief
+    update weighs only the outcome key, not the same misfit again."""
+    d, s0, belief = drawer_episode
+    rng = np.random.default_rng(0)
+    pick = ManipAction("Pick", grasp="top")
+    try:
+        d.real.weighed = b""
+        first = d.step(s0, pick, rng)
+        again = d.step(first.state, pick, rng)
+        assert first.obs.news and not again.obs.news
+        assert "not_applicable" in again.obs.summary
+        nxt = [d.step(s, pick, rng).state for s in belief.states[:4]]
+        keys_only = ManipObservation(again.obs.key, None, "")
+        np.testing.assert_array_equal(d.obs_loglik_many(again.obs, nxt, pick),
+                                      d.obs_loglik_many(keys_only, nxt, pick))  # fmt: skip
+        assert not np.allclose(d.obs_loglik_many(first.obs, nxt, pick),
+                               d.obs_loglik_many(keys_only, nxt, pick))  # fmt: skip
+    finally:
+        d.real.world.restore(s0.sim)
+        d.real.weighed = b""
+
+
+def test_particles_take_the_object_back_when_the_real_hand_still_holds_it(drawer_episode):
+    """After a real step that leaves the object in the hand, a particle whose twin
+    ended empty-handed gets the object into its hand, in the real grasp."""
+    from strug_manip.robot.fetch import GRIPPER_SITE
+
+    d, s0, belief = drawer_episode
+    rng = np.random.default_rng(0)
+    try:
+        real = d.step(s0, ManipAction("Pick", grasp="top"), rng)
+        assert real.obs.key[1] == 1.0, real.obs.summary
+        rw = d.real.world
+        T_go = np.linalg.inv(rw.site_pose(GRIPPER_SITE)) @ rw.object_pose()
+        empty = [d.step(s, ManipAction("Place", 0), rng).state for s in belief.states[:3]]
+        assert not any(d._holding(s) for s in empty)  # nothing held, nothing placed
+        conditioned = d.condition(type(belief)(empty, np.ones(3) / 3, np.arange(3)))
+        for s in conditioned.states:
+            assert d._holding(s)
+            tw = d.worlds.twins[s.origin]
+            tw.restore(s.sim)
+            T = np.linalg.inv(tw.world.site_pose(GRIPPER_SITE)) @ tw.world.object_pose()
+            np.testing.assert_allclose(T, T_go, atol=1e-6)
+    finally:
+        d.real.world.restore(s0.sim)
+        d.real.weighed = b""
+        d.condition(belief)

@@ -370,10 +370,18 @@ class ManipulationWorld:
     def set_cabinet_pose(self, T_world_cabinet: np.ndarray) -> None:
         """Put the cabinet's base (its free joint) at ``T_world_cabinet`` (4, 4), at rest,
         its parts as they are; then update the kinematics."""
+        self._set_free(self.scene.cabinet_prefix + "free", T_world_cabinet)
+
+    def set_object_pose(self, T_world_object: np.ndarray) -> None:
+        """Put the object at ``T_world_object`` (4, 4), at rest; then update the
+        kinematics."""
+        self._set_free(OBJECT_JOINT, T_world_object)
+
+    def _set_free(self, joint: str, T: np.ndarray) -> None:
         m, d = self.model, self.data
-        j = m.joint(self.scene.cabinet_prefix + "free").id
+        j = m.joint(joint).id
         a, v = m.jnt_qposadr[j], m.jnt_dofadr[j]
-        T = np.asarray(T_world_cabinet, dtype=float)
+        T = np.asarray(T, dtype=float)
         d.qpos[a : a + 3] = T[:3, 3]
         mujoco.mju_mat2Quat(d.qpos[a + 3 : a + 7], np.ascontiguousarray(T[:3, :3]).reshape(9))
         d.qvel[v : v + 6] = 0.0

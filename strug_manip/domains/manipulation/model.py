@@ -59,6 +59,7 @@ from strug_manip.control import (
     PullH,
     PullV,
     Push,
+    Status,
     handle_grasps,
     place_targets,
 )
@@ -79,6 +80,7 @@ from strug_manip.domains.manipulation.rules import dragged, inside, open_enough
 from strug_manip.domains.manipulation.state import (
     NOT_APPLICABLE,
     REAL,
+    STATUS_CODES,
     ManipObservation,
     ManipState,
     observation_key,
@@ -86,7 +88,7 @@ from strug_manip.domains.manipulation.state import (
 from strug_manip.domains.manipulation.worlds import ParticleWorlds, Timers
 from strug_manip.objects.generator import CabinetSpec
 from strug_manip.objects.hypotheses import BelievedJoint
-from strug_manip.robot.fetch import BASE_JOINTS
+from strug_manip.robot.fetch import BASE_JOINTS, GRIPPER_SITE
 from strug_manip.world.scene import SceneConfig
 from strug_manip.world.sim import OBJECT_JOINT, CameraFrame, ManipulationWorld, WorldState
 from strug_manip.world.views import cabinet_cloud, look_poses, take_views
@@ -128,6 +130,8 @@ class RealEpisode:
         frames: the head-camera frames taken so far (the initial views, then one per
             step), for logs.
         outcomes: the full robot's outcomes, one per step.
+        weighed: the cabinet's joints (to the mm, as bytes) when the belief last
+            weighed a cloud (``ManipObservation.news``); empty before the first.
     """
 
     world: ManipulationWorld
@@ -136,6 +140,7 @@ class RealEpisode:
     point: np.ndarray
     frames: list[CameraFrame]
     outcomes: list[Outcome]
+    weighed: bytes = b""
 
 
 class ManipulationPOMDP(GenerativePOMDP):
@@ -240,8 +245,12 @@ class ManipulationPOMDP(GenerativePOMDP):
         it stood, its own front where perception put it) and, when the hand is empty,
         where the object rests (it is tracked as well). Each particle keeps its own
         parts' joints and, when the real hand holds the object, its own idea of the
-        grasp. Without this a cabinet the real robot dragged by 5 cm
-        stays put in every particle, and the next Place aims 5 cm off.
+        grasp; a particle whose hand is empty while the real one holds the object (its
+        twin's Place went through where the real one stopped) gets the object back in
+        its hand, in the real grasp. Without this a cabinet the real robot dragged by
+        5 cm stays put in every particle, and the next Place aims 5 cm off; and after a
+        real Place that stopped, every particle believes the object placed and none
+        plans to place it again.
         """
         real, w = self.real, self.worlds
         if real is None or w is None or all(s.t == 0 for s in belief.states):
@@ -250,7 +259,9 @@ class ManipulationPOMDP(GenerativePOMDP):
         rw = real.world
         base = np.array([rw.robot_qpos()[j] for j in BASE_JOINTS])
         moved = rw.cabinet_pose() @ np.linalg.inv(rw.scene.T_world_cabinet)
-        known = [] if holds_object(rw) else [OBJECT_JOINT]
+        holding = holds_object(rw)
+        known = [] if holding else [OBJECT_JOINT]
+        T_go = np.linalg.inv(rw.site_pose(GRIPPER_SITE)) @ rw.object_pose() if holding else None
         done: dict[ManipState, ManipState] = {}
         states = []
         for s in belief.states:
@@ -260,6 +271,8 @@ class ManipulationPOMDP(GenerativePOMDP):
                 tw.world.set_cabinet_pose(moved @ tw.world.scene.T_world_cabinet)
                 tw.world.copy_joints(rw, known)
                 tw.set_robot_base(base)
+                if T_go is not None and not holds_object(tw.world):
+                    tw.world.set_object_pose(tw.world.site_pose(GRIPPER_SITE) @ T_go)
                 done[s] = ManipState(s.origin, tw.snapshot(), s.t, s.last)
             states.append(done[s])
         self._belief = ParticleBelief(states, belief.weights, belief.origin)
@@ -349,7 +362,7 @@ class ManipulationPOMDP(GenerativePOMDP):
         a = self._check_action(a)
         w = self._need_worlds()
         out = np.array([self._key_loglik(o.key, s, a) for s in states])
-        if o.cloud is None:
+        if o.cloud is None or not o.news:
             return out
         t0 = time.perf_counter()
         pose = look_poses(self._need_real().world, 1)[0]
@@ -624,7 +637,7 @@ class ManipulationPOMDP(GenerativePOMDP):
         t0 = time.perf_counter()
         world = real.world
         world.restore(s.sim)
-        i, state = self._likeliest(a)
+        i, state = self._likeliest(a, rng)
         candidates, plan_world = self._skills(i, a, state)
         if plan_world is None:
             plan_world = self._need_worlds().fetch(i, state)
@@ -646,15 +659,20 @@ class ManipulationPOMDP(GenerativePOMDP):
         frame = take_views(world, 1)[0]
         real.frames.append(frame)
         cloud = voxel_thin(cabinet_cloud(world, frame))
+        scene = np.round(world.data.qpos[world.cabinet_qpos_indices()], 3).tobytes()
+        news, real.weighed = scene != real.weighed, scene
         self.timers.real += time.perf_counter() - t0
-        obs = ManipObservation(observation_key(status, holding, motion), cloud, summary)
+        obs = ManipObservation(observation_key(status, holding, motion), cloud, summary, news)
         done = reward != 0.0 or s.t + 1 >= self.max_steps
         return Step(ManipState(REAL, world.snapshot(), s.t + 1, obs.key), obs, reward, done)
 
-    def _likeliest(self, a: ManipAction) -> tuple[int, WorldState]:
+    def _likeliest(self, a: ManipAction, rng: np.random.Generator) -> tuple[int, WorldState]:
         """The model the real robot plans ``a`` against, and its state: for an opening
         or a probe, the hypothesis's holder (in its likeliest current state); for Pick
-        and Place, the likeliest particle that has the action's part."""
+        and Place, the likeliest particle that has the action's part and whose twin can
+        make the action (not ``ik_infeasible``, not :data:`NOT_APPLICABLE`; the search
+        chose the action for the models that can, and a plan made in one that cannot
+        fails before anything moves), else the likeliest that has the part."""
         w = self._need_worlds()
         if a.skill not in ("Pick", "Place"):
             holder = self.parts[a.part].holders[max(a.hypothesis, 0)]
@@ -663,11 +681,14 @@ class ManipulationPOMDP(GenerativePOMDP):
         if b is None:
             return 0, w.initial[0]
         order = np.argsort(-b.weights, kind="stable")
-        for j in order:
-            s = b.states[j]
-            if a.skill == "Pick" or self.parts[a.part].links[s.origin] is not None:
+        states = [b.states[j] for j in order]
+        links = self.parts[a.part].links if a.skill == "Place" else None
+        has = [s for s in states if links is None or links[s.origin] is not None]
+        cannot = {STATUS_CODES[NOT_APPLICABLE], STATUS_CODES[str(Status.IK_INFEASIBLE)]}
+        for s in has:  # the twins' outcomes are cached from the search, mostly
+            if self.step(s, a, rng).obs.key[0] not in cannot:
                 return s.origin, s.sim
-        s = b.states[int(order[0])]
+        s = has[0] if has else states[0]
         return s.origin, s.sim
 
     def _best_state(self, origin: int) -> WorldState | None:

@@ -84,11 +84,18 @@ class ManipObservation:
             :data:`MOTION_BIN`, world frame).
         cloud: the head camera's cabinet points, (N, 3) [m]; None inside a search.
         summary: the skill's outcome in one line, for people.
+        news: the cloud shows the cabinet changed (a part or its base moved by a
+            millimetre or more) since the last cloud the belief weighed, or is the
+            first: only then is it weighed. A model's misfit to a cabinet that has not
+            changed is the same misfit again (perception's error, not independent
+            noise), and weighing it at every step compounds one piece of evidence
+            into certainty.
     """
 
     key: tuple[float, ...]
     cloud: np.ndarray | None = field(default=None, repr=False)
     summary: str = ""
+    news: bool = True
 
 
 def observation_key(status: str, holding: bool, motion: np.ndarray) -> tuple[float, ...]:
