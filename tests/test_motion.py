@@ -251,3 +251,26 @@ def test_bad_inputs_raise(world, ctx, q, planner) -> None:
         ArmMotionPlanner(world.model, ["torso_lift_joint", "torso_lift_joint"])
     with pytest.raises(ConfigError, match="str"):
         ArmMotionPlanner(world.model, "torso_lift_joint")
+
+
+def test_a_start_that_touches_something_is_nudged_free_by_the_smallest_nudge() -> None:
+    """``escape_start``: None when nothing near is free; else a free configuration
+    within the radius, the torso kept, found among the small nudges first."""
+    from strug_manip.control.motion import ESCAPE_RADIUS, escape_start
+
+    q = np.array([0.2, 0.1, -0.3, 0.5, 1.0, -0.2, 0.4, 0.0])
+
+    class Ball:  # touches whatever lies within `reach` [rad] of q
+        def __init__(self, reach: float) -> None:
+            self.reach = reach
+
+        def free(self, x: np.ndarray) -> bool:
+            return float(np.abs(x - q).max()) > self.reach
+
+    bounds = (np.full(8, -2.0), np.r_[2.0, 2.0, 2.0, 2.0, 1.02, 2.0, 2.0, 2.0])
+    x = escape_start(q, Ball(0.05), np.random.default_rng(0), bounds)
+    assert x is not None and Ball(0.05).free(x)
+    assert x[0] == q[0] and np.abs(x - q).max() <= ESCAPE_RADIUS
+    assert np.abs(x - q).max() < 0.15  # a small nudge, not the largest
+    assert np.all(x <= bounds[1])  # joint 4 starts 2 cm from its upper limit
+    assert escape_start(q, Ball(1.0), np.random.default_rng(0), bounds) is None

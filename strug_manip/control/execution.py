@@ -42,7 +42,7 @@ from planners.errors import ConfigError
 from strug_manip.control.context import ControlContext
 from strug_manip.control.driver import JointDriver
 from strug_manip.control.grasps import held_grasp
-from strug_manip.control.motion import NO_PLAN, ArmValidity
+from strug_manip.control.motion import NO_PLAN, ArmValidity, escape_start
 from strug_manip.control.navigation import plan_route
 from strug_manip.control.outcome import Outcome, SkillStop, Status
 from strug_manip.control.params import DEFAULT_PARAMS, SkillParams
@@ -362,12 +362,22 @@ class FullRobot:
         base: np.ndarray | None = None,
         phase: str = "",
     ) -> np.ndarray:
-        """OMPL waypoints (N, 8) from ``q_from`` to ``q_to`` (excluded the start) with
-        the base at ``base`` (default: where it is)."""
+        """OMPL waypoints (N, 8) from ``q_from`` to ``q_to`` (the start excluded) with
+        the base at ``base`` (default: where it is); a start that touches something is
+        first nudged free (:func:`~.motion.escape_start`), and the nudged start leads."""
         t = time.perf_counter()
         checker = self._checker(carrying)
         validity = ArmValidity(checker, self.drv.base if base is None else base)
-        for planner in self.ctx.planners(self.plan_world.model):
+        # A start that touches something (a stop, or a guarded recovery, left the arm
+        # against the cabinet) is nudged free first.
+        planners = self.ctx.planners(self.plan_world.model)
+        lead = None
+        if not validity.free(q_from):
+            rng = np.random.default_rng(self.seed + self.n_plans)
+            bounds = (planners[0].lower, planners[0].upper)
+            lead = escape_start(q_from, validity, rng, bounds)
+        q_from = q_from if lead is None else lead
+        for planner in planners:
             plan = planner.plan(
                 dict(zip(ARM_TORSO_JOINTS, q_from.tolist(), strict=True)),
                 dict(zip(ARM_TORSO_JOINTS, q_to.tolist(), strict=True)),
@@ -381,7 +391,7 @@ class FullRobot:
         self.plan_seconds += time.perf_counter() - t
         if not plan.success:
             raise SkillStop(Status.NO_MOTION_PLAN, f"{plan.reason}: {plan.detail}", phase)
-        return plan.waypoints[1:]
+        return plan.waypoints[1:] if lead is None else plan.waypoints
 
     def _route(self, target: np.ndarray, arm: np.ndarray, carrying) -> list[np.ndarray]:
         """Base poses to drive through to ``target`` with the arm at ``arm`` (its drive

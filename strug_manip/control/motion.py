@@ -54,6 +54,9 @@ LIMIT_TOLERANCE = 0.01
 #: Range used for a joint without limits in the model [rad] (one turn each way).
 UNLIMITED_RANGE = (-math.pi, math.pi)
 
+#: :func:`escape_start`: random tries, and the largest nudge per arm joint [rad].
+ESCAPE_TRIES, ESCAPE_RADIUS = 100, 0.3
+
 #: Failure reasons of :class:`MotionPlan`.
 START_INVALID = "start invalid"
 GOAL_INVALID = "goal invalid"
@@ -371,3 +374,32 @@ class ArmValidity:
 
     def contacts(self, x: np.ndarray) -> list[str]:
         return self.checker.contacts(np.concatenate([self.base, x]))
+
+
+def escape_start(
+    q: np.ndarray,
+    validity: ArmValidity,
+    rng: np.random.Generator,
+    bounds: tuple[np.ndarray, np.ndarray],
+    tries: int = ESCAPE_TRIES,
+    radius: float = ESCAPE_RADIUS,
+) -> np.ndarray | None:
+    """A configuration near torso + arm ``q`` (8,) that touches nothing, within
+    ``bounds`` (lower, upper, each (8,)), for a plan whose start touches something;
+    None if none of ``tries`` random nudges does.
+
+    MoveIt's FixStartStateCollision adapter: the k-th nudge draws each arm joint (not
+    the torso) uniformly within ``radius * k / tries`` [rad] of ``q``, clipped to the
+    bounds, the smallest nudges first. The default 0.3 rad moves the hand up to about
+    20 cm at full reach: enough to unwedge an upper arm pressed against a cabinet's
+    top (smaller nudges left it there on a tuning episode); the robot reaches the
+    nudged start by a straight move.
+    """
+    lower, upper = (np.asarray(b, dtype=float) for b in bounds)
+    for k in range(1, tries + 1):
+        r = radius * k / tries
+        x = np.asarray(q, dtype=float) + np.r_[0.0, rng.uniform(-r, r, len(q) - 1)]
+        x = np.clip(x, lower, upper)
+        if validity.free(x):
+            return x
+    return None
