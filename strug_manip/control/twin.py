@@ -28,11 +28,12 @@ the same :class:`~strug_manip.control.outcome.Outcome`:
    collision free by construction, is not simulated), then follows the lines (their
    Cartesian poses, on the same schedule as the arm's joint path; the retreat after a
    release too: backing away can catch a handle) and grips, with the same settle and
-   grip times, the same monitors (a lost grasp, the hand held back more than the
-   tracking tolerance) and the same facts measured at the end; after the last
-   release the arm's links (mocap bodies) follow the arm's joint path too, so a
-   forearm backing out of a drawer sweeps what the full robot's would; then hand and
-   arm follow the full robot's stow (the same plan, :func:`~strug_manip.control.
+   grip times, the same monitors (a lost grasp, the cabinet slid more than
+   ``cabinet_motion_limit``, the hand held back more than the tracking tolerance)
+   and the same facts measured at the end; after the last release the arm's links
+   (mocap bodies) follow the arm's joint path too, so a forearm backing out of a
+   drawer sweeps what the full robot's would; then hand and arm follow the full
+   robot's stow (the same plan, :func:`~strug_manip.control.
    execution.plan_stow`) until they are clear of the cabinet, leave the scene, and the
    cabinet and the object settle for :data:`COAST_TIME`, and on while the cabinet still
    moves (:data:`REST_SPEED`), up to the rest of the stow's duration (a drawer of a
