@@ -374,3 +374,15 @@ def test_particles_take_the_object_back_when_the_real_hand_still_holds_it(drawer
         d.real.world.restore(s0.sim)
         d.real.weighed = b""
         d.condition(belief)
+
+
+def test_a_drawer_too_narrow_for_its_box_is_refused():
+    """A cell 3.5 cm wide leaves a drawer's walls and clearances no inside (its box's
+    back board would be of negative width): the model refuses it, and the belief never
+    samples one (``assembly.drawer_fits``)."""
+    from strug_manip.objects.assembly import PartModel, drawer_fits
+
+    assert not drawer_fits((0.0, 0.035, 0.0, 0.2)) and drawer_fits((0.0, 0.3, 0.0, 0.2))
+    with pytest.raises(ConfigError, match="drawer's box"):
+        PartModel("drawer", (0.0, 0.035, 0.0, 0.2), np.array([1.0, 0.0, 0.0]),
+                  np.zeros(3), upper=0.2)  # fmt: skip

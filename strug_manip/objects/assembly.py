@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -61,6 +62,16 @@ DENSITY = 575.0
 #: board thickness [m], side clearance [m] (generator: 0.60-0.85, 0.80-0.95, 0.008-0.012,
 #: 0.006).
 DRAWER_BOX = (0.72, 0.875, 0.010, 0.006)
+#: The narrowest cell a drawer fits [m]: side clearances and box walls, and a 1 cm inside.
+_MIN_DRAWER_WIDTH = 2 * DRAWER_BOX[3] + 2 * DRAWER_BOX[2] + 0.01
+
+
+def drawer_fits(rect: Sequence[float]) -> bool:
+    """A drawer's box fits the cell ``rect`` (y0, y1, z0, z1) [m] (front frame): its
+    walls and side clearances leave an inside at least 1 cm wide."""
+    return float(rect[1]) - float(rect[0]) > _MIN_DRAWER_WIDTH
+
+
 #: Shelf board thickness [m] (the generator's).
 SHELF_BOARD = 0.008
 KINDS = ("drawer", "door", "panel", "shelf")
@@ -120,6 +131,11 @@ class PartModel:
             raise ConfigError(f"a door needs hinge in {SIDES}, got {self.hinge!r}")
         if self.kind in ("drawer", "door") and not self.upper > 0:
             raise ConfigError(f"a movable part needs upper > 0, got {self.upper!r}")
+        if self.kind == "drawer" and not drawer_fits(self.rect):
+            raise ConfigError(
+                f"a drawer's box needs a cell wider than {_MIN_DRAWER_WIDTH:.3f} m, "
+                f"got rect {self.rect}"
+            )
         if self.stay is not None and not (
             self.kind == "door" and self.hinge in ("top", "bottom") and self.stay > 0
         ):

@@ -59,6 +59,7 @@ from strug_manip.objects.assembly import (
     CabinetModel,
     PartModel,
     assemble,
+    drawer_fits,
     on_stand,
 )
 from strug_manip.objects.generator import CabinetSpec, axis_angle
@@ -208,7 +209,7 @@ def _draw_part(
         return [PartModel(kind, tuple(rect), np.zeros(3), np.zeros(3))] if _ok(rect) else []
     if kind_i == 1:
         rect = h.rect + rng.normal(0.0, cfg.rect_noise, 4)
-        rects = [r for r in _maybe_split(rect, h, cfg, rng) if _ok(r)]
+        rects = [r for r in _maybe_split(rect, h, cfg, rng) if _ok(r) and drawer_fits(r)]
         q = max(0.0, h.q_drawer + rng.normal(0.0, max(h.q_std, cfg.q_noise)))
         out = []
         for r in rects:
