@@ -284,7 +284,7 @@ class PlanningTwin:
         # object (to the millimetre).
         state = b""
         if pw is not None:
-            state = np.round(pw.data.qpos[pw.cabinet_qpos_indices()], 3).tobytes()
+            state = pw.cabinet_key()
         obj = np.round(self.world.data.qpos[self._obj_adr : self._obj_adr + 7], 3).tobytes()
 
         def search() -> Placement:

@@ -37,13 +37,13 @@ import numpy as np
 
 from planners.errors import ConfigError
 from strug_manip.objects.generator import (
-    GRAVITY,
     METAL_DENSITY,
     SEMANTICS,
     CabinetSpec,
     Geom,
     PartSpec,
     _inertial,
+    flap_stay_friction,
 )
 
 #: Carcass board thickness [m] (generator: 0.015-0.020).
@@ -392,8 +392,8 @@ def assemble(
         y0, y1, z0, z1 = p.rect
         inertial = _inertial(geoms_o, densities)
         friction = float(p.friction) if movable else 0.0
-        if p.stay is not None:  # as the generator fits one (lever: hinge to centre of mass)
-            friction = p.stay * inertial.mass * GRAVITY * abs(float(inertial.com[2]))
+        if p.stay is not None:  # as the generator fits one
+            friction = flap_stay_friction(p.stay, inertial)
         spec = PartSpec(
             link=f"link_{n}",
             joint=f"joint_{n}",

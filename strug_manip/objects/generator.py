@@ -254,6 +254,13 @@ def _inertial(geoms: Sequence[Geom], densities: dict[str, float]) -> Inertial:
     return Inertial(total, com, inertia)
 
 
+def flap_stay_friction(hold: float, inertial: Inertial) -> float:
+    """The friction [N m] of a flap's friction stay: ``hold`` (:data:`FLAP_STAY_HOLD`)
+    times the flap's gravity torque when horizontal (its mass at its centre of mass's
+    distance from the hinge, ``inertial`` in the link frame)."""
+    return hold * inertial.mass * GRAVITY * abs(float(inertial.com[2]))
+
+
 @dataclass(frozen=True)
 class PartSpec:
     """One cell's part: its link, its joint to the carcass and where to grasp it.
@@ -609,8 +616,7 @@ def generate_cabinet(
         inertial = _inertial(d["geoms"], densities)
         if d["kind"] == "door" and d["hinge"] in ("top", "bottom"):
             # Friction stay: hold the flap against gravity, even horizontal.
-            lever = abs(float(inertial.com[2]))
-            d["friction"] = _uniform(rng, FLAP_STAY_HOLD) * inertial.mass * GRAVITY * lever
+            d["friction"] = flap_stay_friction(_uniform(rng, FLAP_STAY_HOLD), inertial)
         parts.append(_finish_part(d, inertial))
     return CabinetSpec(
         seed=int(seed),

@@ -140,6 +140,7 @@ class ManipulationWorld:
         self.robot_joints: list[str] = list(self.scene.home_qpos)
         self._cabinet_body = m.body(pre + self.scene.cabinet.root).id
         self._object_body = m.body("object").id
+        self._cabinet_qpos = self.cabinet_qpos_indices()
         self._renderer: mujoco.Renderer | None = None
         self.reset()
 
@@ -338,6 +339,11 @@ class ManipulationWorld:
         free = int(m.jnt_qposadr[m.joint(self.scene.cabinet_prefix + "free").id])
         parts = [int(m.jnt_qposadr[m.joint(n).id]) for n in self.part_joints]
         return np.array([*range(free, free + 7), *parts])
+
+    def cabinet_key(self) -> bytes:
+        """The cabinet's coordinates (base and parts) rounded to 1e-3 (mm, mrad), as
+        bytes: equal keys, the same cabinet state to the millimetre (a cache key)."""
+        return np.round(self.data.qpos[self._cabinet_qpos], 3).tobytes()
 
     def part_positions(self) -> dict[str, float]:
         """Every cabinet part joint's position [m or rad], by joint name."""

@@ -659,7 +659,7 @@ class ManipulationPOMDP(GenerativePOMDP):
         frame = take_views(world, 1)[0]
         real.frames.append(frame)
         cloud = voxel_thin(cabinet_cloud(world, frame))
-        scene = np.round(world.data.qpos[world.cabinet_qpos_indices()], 3).tobytes()
+        scene = world.cabinet_key()
         news, real.weighed = scene != real.weighed, scene
         self.timers.real += time.perf_counter() - t0
         obs = ManipObservation(observation_key(status, holding, motion), cloud, summary, news)

@@ -134,8 +134,7 @@ class ParticleWorlds:
         tw = self.twins[i]
         tw.restore(state)
         w = tw.world
-        q = np.round(w.data.qpos[w.cabinet_qpos_indices()], 3).tobytes()
-        key = (i, q)
+        key = (i, w.cabinet_key())
         cloud = self.clouds.lookup(key)
         if cloud is None:
             fw = self.fetch(i, state)
