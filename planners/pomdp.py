@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import math
 from abc import ABC, abstractmethod
-from collections.abc import Callable, Hashable
+from collections.abc import Callable, Hashable, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, NamedTuple
 
@@ -263,6 +263,20 @@ class GenerativePOMDP(ABC):
             np.array([x.done for x in out], dtype=bool),
         )
 
+    def applicable(self, s: Any, a: Hashable) -> bool:
+        """False when ``a`` cannot start in ``s``: it would do nothing and cost a step
+        (a skill that needs an empty hand while the hand is full, a door already open).
+
+        The tree solvers leave such actions out of a node (:func:`legal_in`, and
+        :class:`planners.solvers.action_tree.ActionTree`'s ``keep``); a no-op's value
+        is the discounted value of its own node, so with a few visits per action the
+        noise of the estimates lets it win the root. Default: every action is
+        applicable. Must be cheap (it is asked per particle, node and action), must not
+        draw randomness, and may say True for an action that then turns out to do
+        nothing, never False for one that would do something.
+        """
+        return True
+
     def obs_loglik_many(self, o: Any, states: list[Any], a: Hashable) -> np.ndarray:
         """``obs_loglik(o, s, a)`` for every ``s`` in ``states``, shape ``(N,)``."""
         return np.array([self.obs_loglik(o, s, a) for s in states], dtype=float)
@@ -391,6 +405,12 @@ class GenerativePOMDP(ABC):
         return f"{len(belief)} particles, ESS {belief.ess():.0f}"
 
 
+def provides_applicable(pomdp: GenerativePOMDP) -> bool:
+    """True when ``pomdp``'s class defines its own :meth:`GenerativePOMDP.applicable`
+    (the solvers skip the filter on domains where every action always applies)."""
+    return type(pomdp).applicable is not GenerativePOMDP.applicable
+
+
 def provides_plan(pomdp: GenerativePOMDP) -> bool:
     """True when ``pomdp``'s class defines its own :meth:`GenerativePOMDP.plan_for`."""
     return type(pomdp).plan_for is not GenerativePOMDP.plan_for
@@ -431,3 +451,18 @@ def _attribute_ok(attr: str, v: Any) -> bool:
     if attr == "max_abs_reward":
         return number and math.isfinite(v) and v > 0.0
     return isinstance(v, bool | np.bool_)
+
+
+def legal_in(
+    pomdp: GenerativePOMDP, states: Sequence[Any], weights: Sequence[float] | None = None
+) -> Callable[[Hashable], bool]:
+    """The predicate "``a`` is applicable in at least one of ``states`` (those with a
+    weight > 0 when ``weights`` is given)": the actions a node of these particles
+    offers (:meth:`GenerativePOMDP.applicable`)."""
+    live = (
+        list(states)
+        if weights is None
+        else [s for s, w in zip(states, weights, strict=True) if w > 0.0]
+    )
+    applicable = pomdp.applicable
+    return lambda a: any(applicable(s, a) for s in live)

@@ -386,3 +386,32 @@ def test_a_drawer_too_narrow_for_its_box_is_refused():
     with pytest.raises(ConfigError, match="drawer's box"):
         PartModel("drawer", (0.0, 0.035, 0.0, 0.2), np.array([1.0, 0.0, 0.0]),
                   np.zeros(3), upper=0.2)  # fmt: skip
+
+
+def test_actions_that_cannot_start_are_not_applicable_and_the_twin_agrees(drawer_episode):
+    """One hand: with nothing held no Place applies, with the object held only Place
+    does, and the twin ends each refused action not_applicable; an opened drawer's
+    opening no longer applies while the other parts' still do."""
+    d, _, belief = drawer_episode
+    rng = np.random.default_rng(0)
+    s = belief.states[0]
+    acts = list(d.action_space().discretized)
+    assert not any(d.applicable(s, a) for a in acts if a.skill == "Place")
+    pick = ManipAction("Pick", grasp="top")
+    assert d.applicable(s, pick)
+    held = d.step(s, pick, rng).state
+    assert d._holding(held)
+    for a in acts:
+        if a.skill != "Place":
+            assert not d.applicable(held, a), a
+            assert "not_applicable" in d.step(held, a, rng).obs.summary
+    openings = [a for a in acts if a.skill == "OpenDrawer" and d.applicable(s, a)]
+    for a in openings:
+        step = d.step(s, a, rng)
+        if step.obs.summary.startswith("OpenDrawer: ok"):
+            break
+    else:
+        pytest.fail(f"no drawer of particle {s.origin} opens in its twin")
+    assert not d._can_start(step.state, a)
+    others = [b for b in openings if b.part != a.part]
+    assert others and all(d._can_start(step.state, b) for b in others)

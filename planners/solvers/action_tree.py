@@ -39,6 +39,13 @@ from planners.solvers.exploration import best_index, ucb_select
 
 WIDENING_MODES = ("auto", "all", "dpw", "hpw")
 
+#: Which actions a node offers: ``keep(a)`` is True for an action applicable there.
+Keep = Callable[[Hashable], bool]
+
+#: Draws of a widening step before it takes an action ``keep`` refuses (a schema whose
+#: every parameter is refused still gets a child, as with ``keep`` None).
+KEEP_TRIES = 20
+
 
 def check_widening(mode: str, k: float, alpha: float) -> None:
     """Validate a ``widening`` mode and its ``k``, ``alpha``."""
@@ -112,17 +119,36 @@ class ActionTree:
             self.space, self.mode, self.k, self.alpha, self.c, self.rng, self.u, self.normalized
         )
 
-    def expand_all(self, h: int) -> list[int]:
-        """Make every action of the finite action set a child of ``h`` (which has none
-        yet); returns its children. The actions are distinct, so no lookup is needed."""
-        n, k = len(self.a_n), len(self.actions)
+    def expand_all(self, h: int, keep: Keep | None = None) -> list[int]:
+        """Make every action of the finite action set that ``keep`` accepts (all when
+        ``keep`` is None or accepts none) a child of ``h`` (which has none yet); returns
+        its children."""
+        actions = self.actions
+        if keep is not None:
+            actions = [a for a in actions if keep(a)] or actions
+        return self.add_children(h, actions)
+
+    def add_children(self, h: int, actions: list[Hashable]) -> list[int]:
+        """Make ``actions`` (distinct, so no lookup is needed) the children of ``h``
+        (which has none yet); returns its children."""
+        n, k = len(self.a_n), len(actions)
         self.b_children[h].extend(range(n, n + k))
         self.a_n.extend([0] * k)
         self.a_q.extend([0.0] * k)
-        self.a_action.extend(self.actions)
+        self.a_action.extend(actions)
         self.a_solved.extend([False] * k)
         self.a_children.extend([[] for _ in range(k)])
         return self.b_children[h]
+
+    def _draw(self, draw: Callable[[], Hashable], keep: Keep | None) -> Hashable:
+        """``draw()`` until ``keep`` accepts it (at most :data:`KEEP_TRIES` draws; the
+        last one is taken regardless)."""
+        a = draw()
+        for _ in range(KEEP_TRIES - 1):
+            if keep is None or keep(a):
+                break
+            a = draw()
+        return a
 
     def add_belief_node(self) -> int:
         """Register the next belief node (call once per belief node); returns its id."""
@@ -162,27 +188,31 @@ class ActionTree:
             children, self.a_q, self.a_n, n_parent, self.c, self.normalized, self._solved
         )
 
-    def select(self, h: int, n_h: int) -> tuple[int, int]:
+    def select(self, h: int, n_h: int, keep: Keep | None = None) -> tuple[int, int]:
         """``(action node, schema node or -1)`` to simulate from belief node ``h``.
 
         Args:
             h: the belief node.
             n_h: its visit count N(h) before this simulation.
+            keep: which actions the node offers (``keep(a)``: applicable in its
+                particles, :func:`planners.pomdp.legal_in`); None offers every action.
+                Read when children are made: the first expansion ("all"), each new
+                draw ("dpw", "hpw": a refused draw is redrawn).
         """
         children = self.b_children[h]
         if self.mode == "all":  # the hot path of POMCP: one call, no detour
             if not children:
-                self.expand_all(h)
+                self.expand_all(h, keep)
             return ucb_select(
                 children, self.a_q, self.a_n, n_h, self.c, self.normalized, self._solved
             ), -1
         if self.mode == "dpw":
             if len(children) <= self.k * n_h**self.alpha:
-                self._add_action(h, self.space.sample(self.rng))
+                self._add_action(h, self._draw(lambda: self.space.sample(self.rng), keep))
             return self._ucb(children, n_h), -1
-        return self._select_hpw(h, n_h)
+        return self._select_hpw(h, n_h, keep)
 
-    def _select_hpw(self, h: int, n_h: int) -> tuple[int, int]:
+    def _select_hpw(self, h: int, n_h: int, keep: Keep | None = None) -> tuple[int, int]:
         first = self.b_schema_first[h]
         if first < 0:
             first = self.b_schema_first[h] = len(self.s_n)
@@ -208,8 +238,9 @@ class ActionTree:
         kids = self.s_children[snode]
         dim = self.space.schemas[schema].dim
         if (not kids) or (dim > 0 and len(kids) <= self.k * s_n[snode] ** self.alpha):
-            params = self.space.sample_params(schema, self.rng)
-            node = self._add_action(h, self.space.build(schema, params))
+            space, rng = self.space, self.rng
+            a = self._draw(lambda: space.build(schema, space.sample_params(schema, rng)), keep)
+            node = self._add_action(h, a)
             if node not in kids:
                 kids.append(node)
         return self._ucb(kids, s_n[snode]), snode

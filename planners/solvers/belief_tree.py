@@ -37,8 +37,8 @@ from typing import Any
 import numpy as np
 
 from planners.errors import ConfigError, check_positive_float, check_positive_int
-from planners.pomdp import GenerativePOMDP
-from planners.solvers.action_tree import ActionTree, check_widening, resolve_widening
+from planners.pomdp import GenerativePOMDP, legal_in, provides_applicable
+from planners.solvers.action_tree import ActionTree, Keep, check_widening, resolve_widening
 from planners.solvers.base import Budget, SearchInfo, TreeSearchConfig, UniformStream
 from planners.solvers.rollout import check_rollout, make_rollout, plan_return, resolve_rollout
 
@@ -265,6 +265,7 @@ class BeliefTreeSearch:
         self.run_from = make_rollout(
             pomdp, leaf, finite, space, self.depth, self.gamma, rng, self.u
         )
+        self.filter = provides_applicable(pomdp)
         self.node_value, self.beta, self.reward_weight = node_value, beta, reward_weight
         self.terminal_bonus = terminal_bonus
         self.with_bonus = node_value is not None and beta > 0.0
@@ -355,10 +356,19 @@ class BeliefTreeSearch:
         plan = self.pomdp.plan_for(self.states[h][self.draw(h)], self.rng)
         return plan_return(self.pomdp, s, plan, d, self.depth, self.gamma, self.rng)
 
+    def offered(self, h: int) -> Keep:
+        """The actions node ``h`` offers: those applicable in one of its live,
+        weighted particles."""
+        live = [
+            s for s, w, ok in zip(self.states[h], self.weights[h].tolist(), self.alive[h],
+                                  strict=True) if w > 0.0 and ok
+        ]  # fmt: skip
+        return legal_in(self.pomdp, live)
+
     def simulate(self, h: int, d: int) -> float:
         """One descent from belief node ``h`` at depth ``d``; returns its return."""
         tree, nh = self.tree, self.visits[h]
-        anode, snode = tree.select(h, nh)
+        anode, snode = tree.select(h, nh, self.offered(h) if self.filter else None)
         generated = tree.a_children[anode]
         cfg = self.config
         if len(generated) <= cfg.k_obs * tree.a_n[anode] ** cfg.alpha_obs:

@@ -31,7 +31,7 @@ import numpy as np
 
 from planners.belief import ParticleBelief
 from planners.errors import check_positive_float
-from planners.pomdp import GenerativePOMDP, check_pomdp
+from planners.pomdp import GenerativePOMDP, check_pomdp, legal_in, provides_applicable
 from planners.solvers.action_tree import ActionTree
 from planners.solvers.base import (
     Budget,
@@ -134,10 +134,13 @@ class POMCPTree:
         """Belief nodes + action nodes."""
         return len(self.visits) + self.actions.size()
 
-    def child(self, action_index: int, obs_key: Hashable) -> int | None:
-        """The root's belief child under (action index, observation key), if any."""
-        root = self.actions.b_children[0]
-        return self.children.get((root[action_index], obs_key)) if root else None
+    def child(self, action: Hashable, obs_key: Hashable) -> int | None:
+        """The root's belief child under (action, observation key), if any."""
+        tree = self.actions
+        for anode in tree.b_children[0] if tree.b_children else ():
+            if tree.a_action[anode] == action:
+                return self.children.get((anode, obs_key))
+        return None
 
     def subtree(self, h: int) -> POMCPTree:
         """A copy of the subtree under belief node ``h``, renumbered breadth-first."""
@@ -155,7 +158,8 @@ class POMCPTree:
             out.visits[dst] = self.visits[src]
             if not old.b_children[src]:
                 continue
-            for j, anode in zip(new.expand_all(dst), old.b_children[src], strict=True):
+            kept = [old.a_action[anode] for anode in old.b_children[src]]
+            for j, anode in zip(new.add_children(dst, kept), old.b_children[src], strict=True):
                 new.a_n[j], new.a_q[j] = old.a_n[anode], old.a_q[anode]
                 for key, child in below.get(anode, ()):
                     out.children[(j, key)] = len(queue)
@@ -171,12 +175,13 @@ class POMCPPlanner:
         self.config = config
         self.pomdp = pomdp
         self.actions = list(pomdp.action_space().discretized)
+        self._index = {a: i for i, a in enumerate(self.actions)}
         self.depth, self.c, self.gamma = config.resolved(pomdp)
         self.obs_key = observation_bins(pomdp, config.obs_bin)
         if config.rollout == "heuristic":
             domain_policy(pomdp)  # a domain without one fails here, not mid-episode
         self._tree: POMCPTree | None = None
-        self._executed: tuple[int, Hashable] | None = None
+        self._executed: tuple[Hashable, Hashable] | None = None
         self.steps_taken = 0
 
     def observe(self, action: Hashable, observation: Any) -> None:
@@ -184,7 +189,7 @@ class POMCPPlanner:
         self.steps_taken += 1
         if self.config.reuse_tree and action in self.actions:
             key = self.obs_key(observation)
-            self._executed = (self.actions.index(action), key)
+            self._executed = (action, key)
 
     def _fresh(self, rng: np.random.Generator, u: UniformStream) -> POMCPTree:
         cfg, space = self.config, self.pomdp.action_space()
@@ -224,9 +229,17 @@ class POMCPPlanner:
         b_n, children, add_belief = tree.visits, tree.children, nodes.add_belief_node
         particles = tree.particles if cfg.reuse_tree else None
 
+        # Which actions a node offers, as POMCPOW's (see there): the root's from the
+        # belief, a deeper node's from the first state to reach it.
+        applicable = pomdp.applicable if provides_applicable(pomdp) else None
+        root_keep = None if applicable is None else legal_in(pomdp, belief.states, belief.weights)
+
         def simulate(s: Any, h: int, d: int) -> float:
             nh = b_n[h]
-            anode, _ = select(h, nh)
+            keep = None
+            if applicable is not None:
+                keep = root_keep if h == 0 else (lambda a: applicable(s, a))
+            anode, _ = select(h, nh, keep)
             s2, o, r, done = step(s, a_action[anode], rng)
             if done or d + 1 >= depth:
                 total = r
@@ -251,10 +264,13 @@ class POMCPPlanner:
             simulate(sample_root(), 0, 0)
             sims += 1
 
-        if nodes.b_children[0]:  # the finite set, in order
-            _, q, visits = nodes.root_stats()
-        else:  # a kept root that was reached once and no time was left to expand it
-            q, visits = np.zeros(len(self.actions)), np.zeros(len(self.actions), dtype=np.int64)
+        # Per action of the finite set, in order (a root without children: a kept root
+        # reached once with no time left to expand it; actions the root does not offer
+        # stay unvisited).
+        q, visits = np.zeros(len(self.actions)), np.zeros(len(self.actions), dtype=np.int64)
+        for anode in nodes.b_children[0]:
+            i = self._index[nodes.a_action[anode]]
+            q[i], visits[i] = nodes.a_q[anode], nodes.a_n[anode]
         best = best_index(q, visits) or 0
         if cfg.reuse_tree:
             self._tree = tree

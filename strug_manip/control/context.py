@@ -10,8 +10,10 @@ Tests inject a context with other solvers or options instead of patching modules
 
 from __future__ import annotations
 
+import weakref
 from collections import OrderedDict
 from collections.abc import Callable, Hashable
+from typing import TYPE_CHECKING, Any
 
 import mujoco
 
@@ -21,6 +23,9 @@ from strug_manip.control.motion import ArmMotionPlanner
 from strug_manip.control.outcome import SkillStop
 from strug_manip.control.placement import BASE_COST, Placement, PlacementHints
 from strug_manip.robot.fetch import ARM_TORSO_JOINTS, BASE_JOINTS
+
+if TYPE_CHECKING:
+    from strug_manip.world.sim import ManipulationWorld
 
 #: Per scene model: the model, its planners (first, fallback) and its contact checker.
 _Entry = tuple[mujoco.MjModel, tuple[ArmMotionPlanner, ArmMotionPlanner], ContactChecker]
@@ -59,6 +64,28 @@ class ControlContext:
         self.placement_misses = 0
         #: Candidates that worked for recent plans (the planning twins' searches).
         self.hints = PlacementHints()
+        # One token per planning world (placement keys), and what is derived from a
+        # placement in a planning world alone (the stow's plan), shared by every twin
+        # and dropped with the world or the placement.
+        self._tokens: weakref.WeakKeyDictionary[ManipulationWorld, object] = (
+            weakref.WeakKeyDictionary()
+        )
+        self._derived: weakref.WeakKeyDictionary[Placement, dict] = weakref.WeakKeyDictionary()
+
+    def world_token(self, world: ManipulationWorld) -> object:
+        """A key for ``world`` in the placement cache: an object made for it (not its
+        id, which a later world may reuse once it is gone); the same for every twin
+        that plans in ``world``."""
+        return self._tokens.setdefault(world, object())
+
+    def derived(self, placement: Placement, key: Hashable, compute: Callable[[], Any]) -> Any:
+        """What ``compute()`` gave for ``placement`` and ``key`` before, else its result,
+        kept as long as the placement lives (keyed by the object: one the placement
+        cache lets go takes what was derived from it along)."""
+        table = self._derived.setdefault(placement, {})
+        if key not in table:
+            table[key] = compute()
+        return table[key]
 
     def _entry(
         self, model: mujoco.MjModel

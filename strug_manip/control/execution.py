@@ -155,12 +155,13 @@ def plan_stow(
     for start, prefix in starts:
         if len(prefix) and checker.segment(np.r_[base, q_end], np.r_[base, start]):
             continue
-        for planner in ctx.planners(plan_world.model):
+        planners = ctx.planners(plan_world.model)
+        for i, planner in enumerate(planners):
             res = planner.plan(
                 dict(zip(ARM_TORSO_JOINTS, start.tolist(), strict=True)),
                 dict(zip(ARM_TORSO_JOINTS, goal.tolist(), strict=True)),
                 validity,
-                timeout=params.plan_timeout,
+                timeout=params.planner_timeout(i, len(planners)),
                 seed=seed,
             )
             if res.success or res.reason != NO_PLAN:
@@ -377,12 +378,12 @@ class FullRobot:
             bounds = (planners[0].lower, planners[0].upper)
             lead = escape_start(q_from, validity, rng, bounds)
         q_from = q_from if lead is None else lead
-        for planner in planners:
+        for i, planner in enumerate(planners):
             plan = planner.plan(
                 dict(zip(ARM_TORSO_JOINTS, q_from.tolist(), strict=True)),
                 dict(zip(ARM_TORSO_JOINTS, q_to.tolist(), strict=True)),
                 validity,
-                timeout=self.params.plan_timeout,
+                timeout=self.params.planner_timeout(i, len(planners)),
                 seed=self.seed + self.n_plans,
             )
             self.n_plans += 1

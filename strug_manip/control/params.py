@@ -94,6 +94,11 @@ class SkillParams:
             reaching into a low drawer with the object is a narrow passage that
             LBKPIECE1 finds within a second or two on an idle core; twice that leaves
             room for a loaded machine (the timeout is wall time, not work).
+        first_planner_timeout: the same for the first of several planners
+            (RRTConnect) [s]: it solves the open arm motions in tens of milliseconds and
+            the narrow passages (an arm reaching out of an open drawer) not within
+            ``plan_timeout`` either, where the fallback (LBKPIECE1) takes over; waiting
+            the full budget for it made most of the planning twin's time.
         drive_tolerance: the base is driven only to targets farther than this [m].
         record_period: trajectory recording period [s].
     """
@@ -127,6 +132,7 @@ class SkillParams:
     cabinet_motion_limit: float = 0.03
     time_budget: float = 60.0
     plan_timeout: float = 4.0
+    first_planner_timeout: float = 0.5
     drive_tolerance: float = 0.02
     record_period: float = 0.02
 
@@ -139,6 +145,10 @@ class SkillParams:
                 raise ConfigError(f"SkillParams.{f.name} must be > 0, got {v!r}")
             if v < 0:
                 raise ConfigError(f"SkillParams.{f.name} must be >= 0, got {v!r}")
+
+    def planner_timeout(self, i: int, n: int) -> float:
+        """The OMPL budget [s] of the ``i``-th of ``n`` planners tried in turn."""
+        return self.first_planner_timeout if i == 0 and n > 1 else self.plan_timeout
 
 
 #: The parameters every skill uses unless given others.

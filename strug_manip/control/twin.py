@@ -188,9 +188,6 @@ class PlanningTwin:
         # What the twin derives from each placement (servos, base response, arm and
         # stow paths), dropped with the placement (:meth:`_of`).
         self._derived: weakref.WeakKeyDictionary[Placement, dict] = weakref.WeakKeyDictionary()
-        self._world_tokens: weakref.WeakKeyDictionary[ManipulationWorld, object] = (
-            weakref.WeakKeyDictionary()
-        )
         self._base_servo: BaseServo | None = None
         m = self.world.model
         self._slide_adr = np.array([m.jnt_qposadr[m.joint(j).id] for j in SLIDES])
@@ -302,11 +299,12 @@ class PlanningTwin:
         )
 
     def _token(self, pw: ManipulationWorld | None) -> object:
-        """A key for planning world ``pw`` in the context's placement cache: an object
-        made for it (not its id, which a later world may reuse once it is gone)."""
+        """A key for planning world ``pw`` in the context's placement cache
+        (:meth:`~strug_manip.control.context.ControlContext.world_token`: twins that
+        plan in one world share its placements)."""
         if pw is None:
             return None
-        return self._world_tokens.setdefault(pw, object())
+        return self.ctx.world_token(pw)
 
     def _planning(self, plan_world: ManipulationWorld | None) -> ManipulationWorld | None:
         """The world of the placement's collision checks: ``plan_world``, else a world of
@@ -582,9 +580,16 @@ class PlanningTwin:
                         lambda: self._stow_path(placement, pw))  # fmt: skip
 
     def _stow_path(self, placement: Placement, pw: ManipulationWorld) -> Stow | None:
-        try:
-            stow = plan_stow(self.ctx, pw, placement, self.params, STOW_SEED)
-        except SkillStop:
+        def plan() -> np.ndarray | None:
+            try:
+                return plan_stow(self.ctx, pw, placement, self.params, STOW_SEED)
+            except SkillStop:
+                return None
+
+        # The plan depends on the planning world alone: every twin that runs this
+        # placement there shares it (the particles of one hypothesis, mostly).
+        stow = self.ctx.derived(placement, ("stow", self._token(pw), self.params), plan)
+        if stow is None:
             return None
         dt = self.world.model.opt.timestep
         base, q_end = placement.start_of(len(placement.lines))

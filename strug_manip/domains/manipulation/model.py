@@ -63,7 +63,7 @@ from strug_manip.control import (
     handle_grasps,
     place_targets,
 )
-from strug_manip.control.skills import holds_object
+from strug_manip.control.skills import HANDLE_RADIUS, holds_object
 from strug_manip.domains.manipulation import belief as belief_mod
 from strug_manip.domains.manipulation.actions import (
     DEFAULT_PROBES,
@@ -353,6 +353,66 @@ class ManipulationPOMDP(GenerativePOMDP):
         done = terminal or s.t + 1 >= self.max_steps
         return Step(ManipState(s.origin, sim, s.t + 1, okey),
                     ManipObservation(okey, None, summary), reward, done)  # fmt: skip
+
+    def applicable(self, s: Any, a: Hashable) -> bool:
+        """False when ``a`` cannot start in particle state ``s``; the solvers then leave
+        it out of the node (a no-op costs one of the episode's 10 steps).
+
+        Decided by the twin's outcome when the search has simulated it already (not
+        :data:`NOT_APPLICABLE`), else by what the twin checks before anything moves:
+
+        * one hand: a grasping skill with the object held, a ``Place`` without it;
+        * a ``Place`` into a part ``s``'s model lacks, or one not open enough to place
+          in (no placement pose);
+        * an opening or probe on a part whose handle has moved more than
+          :data:`~strug_manip.control.skills.HANDLE_RADIUS` in ``s`` from where the
+          model put it: the action's grasps are at the model's initial handle
+          (:meth:`_skills`), so there is nothing to grasp there (the part is open).
+          A part ``s``'s model lacks stays applicable: acting on it is how the robot
+          learns that the model is wrong.
+
+        The real state: always True (the real robot plans against the likeliest model).
+        """
+        if s.origin == REAL:
+            return True
+        w = self._need_worlds()
+        key = (s.origin, s.sim.key, a)
+        hit = w.outcomes.get(key)  # a peek: the search's hit rate counts steps only
+        if hit is not None:
+            return hit[1][0] != STATUS_CODES[NOT_APPLICABLE]
+        can = w.can_start.get(key)
+        if can is None:
+            can = self._can_start(s, self._check_action(a))
+            w.can_start.store(key, can)
+        return can
+
+    def _can_start(self, s: ManipState, a: ManipAction) -> bool:
+        """:meth:`applicable` without a simulated outcome (its checks, in order)."""
+        w = self._need_worlds()
+        tw = w.twins[s.origin]
+        tw.restore(s.sim)
+        world = tw.world
+        if (a.skill == "Place") != holds_object(world):
+            return False
+        if a.skill == "Pick":
+            return True
+        spec = w.particles[s.origin].spec
+        link = self.parts[a.part].links[s.origin]
+        if link is None:
+            return a.skill != "Place"
+        part = spec.part(link)
+        q, T = _position(world, part.joint), world.cabinet_pose()
+        if a.skill == "Place":
+            try:
+                place_targets(spec, link, q, T)
+            except ConfigError:
+                return False
+            return True
+        if part.handle_pos is None:
+            return True
+        q0 = w.particles[s.origin].q.get(part.joint, 0.0)
+        moved = np.linalg.norm(part.handle_at(q, T) - part.handle_at(q0, T))
+        return bool(moved < HANDLE_RADIUS)
 
     def obs_loglik(self, o: Any, s_next: Any, a: Hashable) -> float:
         return float(self.obs_loglik_many(o, [s_next], a)[0])

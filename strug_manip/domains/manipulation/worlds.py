@@ -104,6 +104,8 @@ class ParticleWorlds:
             self.initial.append(tw.snapshot())
         self._fetch: dict[int, ManipulationWorld] = {}
         self.outcomes = LRU(OUTCOMES)
+        # Whether an action can start in a particle state, where not simulated yet.
+        self.can_start = LRU(OUTCOMES)
         self.clouds = LRU(CLOUDS)
         self.timers = Timers()
 
