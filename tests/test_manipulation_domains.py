@@ -3,6 +3,8 @@ and determinism (cabinet seeds below 1,000: the episodes' own seeds are held out
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -415,3 +417,32 @@ def test_actions_that_cannot_start_are_not_applicable_and_the_twin_agrees(drawer
     assert not d._can_start(step.state, a)
     others = [b for b in openings if b.part != a.part]
     assert others and all(d._can_start(step.state, b) for b in others)
+
+
+def test_an_action_the_real_robot_could_not_start_is_refused_until_something_changes(
+    drawer_episode,
+):
+    """A real step that could not start (here a Place with nothing held) is refused at
+    the root, whatever the twins say, and the refusal ends with a step that did
+    something (a Pick)."""
+    d, s0, belief = drawer_episode
+    rng = np.random.default_rng(0)
+    place, pick = ManipAction("Place", 0), ManipAction("Pick", grasp="top")
+    try:
+        failed = d.step(s0, place, rng)
+        assert "not_applicable" in failed.obs.summary
+        assert d.real.refused == {place} and d.real.now == 1
+        root = dataclasses.replace(belief.states[0], t=1)
+        d.real.refused.add(pick)  # as if the real Pick had found no IK
+        assert not d.applicable(root, pick)
+        assert d.applicable(dataclasses.replace(root, t=2), pick)  # deeper: the twins
+        d.real.refused.discard(pick)
+        done = d.step(failed.state, pick, rng)
+        assert done.obs.key[1] == 1.0, done.obs.summary
+        assert not d.real.refused and d.real.now == 2
+    finally:
+        d.real.world.restore(s0.sim)
+        d.real.weighed = b""
+        d.real.refused.clear()
+        d.real.now = 0
+        d.condition(belief)

@@ -16,6 +16,11 @@ next. Three answers, chosen by a config's ``widening`` field:
   their parameters explored without paying for the parameters of the others.
 * ``"auto"``: ``"all"`` on a finite action space, else the solver's default.
 
+A node offers only the actions its solver's ``keep`` accepts (the domain's
+:meth:`~planners.pomdp.GenerativePOMDP.applicable` in the node's particles): a no-op
+costs a step and is worth the discounted value of its own node, so with a handful of
+visits per action it would win the root by noise alone.
+
 UCB is :func:`planners.solvers.exploration.ucb_select`: ``Q + c sqrt(log N / n)``
 (``normalized=False``, POMCPOW.jl's ``MaxUCB``) or its scale-free form with Q min-max
 normalised over the node's visited children; unvisited children are tried first, in

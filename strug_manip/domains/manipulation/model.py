@@ -38,7 +38,7 @@ import functools
 import math
 import time
 from collections.abc import Hashable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -132,6 +132,10 @@ class RealEpisode:
         outcomes: the full robot's outcomes, one per step.
         weighed: the cabinet's joints (to the mm, as bytes) when the belief last
             weighed a cloud (``ManipObservation.news``); empty before the first.
+        refused: the actions the full robot could not start (``ik_infeasible`` or
+            not applicable: nothing moved) since the last real step that did
+            something; :meth:`ManipulationPOMDP.applicable` refuses them at the root.
+        now: the step count of the states after the last real step (the root's).
     """
 
     world: ManipulationWorld
@@ -141,6 +145,8 @@ class RealEpisode:
     frames: list[CameraFrame]
     outcomes: list[Outcome]
     weighed: bytes = b""
+    refused: set[ManipAction] = field(default_factory=set)
+    now: int = 0
 
 
 class ManipulationPOMDP(GenerativePOMDP):
@@ -371,10 +377,20 @@ class ManipulationPOMDP(GenerativePOMDP):
           A part ``s``'s model lacks stays applicable: acting on it is how the robot
           learns that the model is wrong.
 
+        At the root (the states of the current real step), an action the full robot
+        has just failed to start (``ik_infeasible``, not applicable), with nothing
+        changed since, is refused whatever the twins say: the robot would plan it
+        against the same model in the same state and fail again (the twins and the
+        full robot disagree on such actions, and the observation, which no particle
+        predicted, moves no weight: the search would choose it every step).
+
         The real state: always True (the real robot plans against the likeliest model).
         """
         if s.origin == REAL:
             return True
+        real = self.real
+        if real is not None and s.t == real.now and a in real.refused:
+            return False
         w = self._need_worlds()
         key = (s.origin, s.sim.key, a)
         hit = w.outcomes.get(key)  # a peek: the search's hit rate counts steps only
@@ -716,6 +732,13 @@ class ManipulationPOMDP(GenerativePOMDP):
             status, holding, summary = out.status, out.holding, out.summary()
             motion = self._handle(REAL, a, world) - before
             reward = self._reward(world.scene.cabinet_spec, real.target, world, out)
+        # An action the robot could not start from here fails the same way again until
+        # something changes: its plan is made against the same model, in the same state.
+        if status not in (NOT_APPLICABLE, str(Status.IK_INFEASIBLE)):
+            real.refused.clear()
+        else:
+            real.refused.add(a)
+        real.now = s.t + 1
         frame = take_views(world, 1)[0]
         real.frames.append(frame)
         cloud = voxel_thin(cabinet_cloud(world, frame))
