@@ -35,11 +35,13 @@ keeps no per-node list of its own parallel to the tree's.
 from __future__ import annotations
 
 from collections.abc import Callable, Hashable
+from typing import Any
 
 import numpy as np
 
+from planners.belief import ParticleBelief
 from planners.errors import ConfigError, check_positive_float
-from planners.pomdp import ActionSpace
+from planners.pomdp import ActionSpace, GenerativePOMDP, legal_in, provides_applicable
 from planners.solvers.exploration import best_index, ucb_select
 
 WIDENING_MODES = ("auto", "all", "dpw", "hpw")
@@ -50,6 +52,23 @@ Keep = Callable[[Hashable], bool]
 #: Draws of a widening step before it takes an action ``keep`` refuses (a schema whose
 #: every parameter is refused still gets a child, as with ``keep`` None).
 KEEP_TRIES = 20
+
+#: ``offers(h, s)``: the actions history node ``h`` offers, reached by state ``s``.
+Offers = Callable[[int, Any], Keep]
+
+
+def history_offers(pomdp: GenerativePOMDP, belief: ParticleBelief) -> Offers | None:
+    """For the solvers whose nodes are histories (POMCP, POMCPOW): ``offers(h, s)``,
+    the actions node ``h`` offers when state ``s`` reaches it (at the root, those
+    applicable in a weighted particle of ``belief``; deeper, those applicable in the
+    state that reaches the node first, since "all" widening reads ``keep`` once: a
+    history holds the states of one action-observation sequence, which agree on it
+    mostly); None on a domain without its own ``applicable``."""
+    if not provides_applicable(pomdp):
+        return None
+    root = legal_in(pomdp, belief.states, belief.weights)
+    applicable = pomdp.applicable
+    return lambda h, s: root if h == 0 else (lambda a: applicable(s, a))
 
 
 def check_widening(mode: str, k: float, alpha: float) -> None:

@@ -31,8 +31,8 @@ import numpy as np
 
 from planners.belief import ParticleBelief
 from planners.errors import check_positive_float
-from planners.pomdp import GenerativePOMDP, check_pomdp, legal_in, provides_applicable
-from planners.solvers.action_tree import ActionTree
+from planners.pomdp import GenerativePOMDP, check_pomdp
+from planners.solvers.action_tree import ActionTree, history_offers
 from planners.solvers.base import (
     Budget,
     RootSampler,
@@ -229,16 +229,11 @@ class POMCPPlanner:
         b_n, children, add_belief = tree.visits, tree.children, nodes.add_belief_node
         particles = tree.particles if cfg.reuse_tree else None
 
-        # Which actions a node offers, as POMCPOW's (see there): the root's from the
-        # belief, a deeper node's from the first state to reach it.
-        applicable = pomdp.applicable if provides_applicable(pomdp) else None
-        root_keep = None if applicable is None else legal_in(pomdp, belief.states, belief.weights)
+        offers = history_offers(pomdp, belief)  # None: every action, every node
 
         def simulate(s: Any, h: int, d: int) -> float:
             nh = b_n[h]
-            keep = None
-            if applicable is not None:
-                keep = root_keep if h == 0 else (lambda a: applicable(s, a))
+            keep = None if offers is None else offers(h, s)
             anode, _ = select(h, nh, keep)
             s2, o, r, done = step(s, a_action[anode], rng)
             if done or d + 1 >= depth:

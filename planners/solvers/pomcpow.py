@@ -36,8 +36,13 @@ import numpy as np
 
 from planners.belief import ParticleBelief
 from planners.errors import check_positive_float
-from planners.pomdp import GenerativePOMDP, check_pomdp, legal_in, provides_applicable
-from planners.solvers.action_tree import ActionTree, check_widening, resolve_widening
+from planners.pomdp import GenerativePOMDP, check_pomdp
+from planners.solvers.action_tree import (
+    ActionTree,
+    check_widening,
+    history_offers,
+    resolve_widening,
+)
 from planners.solvers.base import (
     Budget,
     RootSampler,
@@ -143,18 +148,11 @@ class POMCPOWPlanner:
         rollout_actions = list(space.discretized) if self.widening == "all" else None
         rollout = make_rollout(pomdp, cfg.rollout, rollout_actions, space, depth, gamma, rng, u)
 
-        # Which actions a node offers (a domain with its own ``applicable``): at the
-        # root, those applicable in a weighted particle of the belief; deeper, those
-        # applicable in the state that reaches the node first (a history node holds
-        # the states of one action-observation sequence, which agree on it mostly).
-        applicable = pomdp.applicable if provides_applicable(pomdp) else None
-        root_keep = None if applicable is None else legal_in(pomdp, belief.states, belief.weights)
+        offers = history_offers(pomdp, belief)  # None: every action, every node
 
         def simulate(s: Any, h: int, d: int) -> float:
             nh = b_n[h]
-            keep = None
-            if applicable is not None:
-                keep = root_keep if h == 0 else (lambda a: applicable(s, a))
+            keep = None if offers is None else offers(h, s)
             anode, snode = select(h, nh, keep)
             a = a_action[anode]
             generated = a_children[anode]
