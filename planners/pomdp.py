@@ -454,15 +454,26 @@ def _attribute_ok(attr: str, v: Any) -> bool:
 
 
 def legal_in(
-    pomdp: GenerativePOMDP, states: Sequence[Any], weights: Sequence[float] | None = None
+    pomdp: GenerativePOMDP,
+    states: Sequence[Any],
+    weights: Sequence[float] | None = None,
+    alive: Sequence[bool] | None = None,
 ) -> Callable[[Hashable], bool]:
     """The predicate "``a`` is applicable in at least one of ``states`` (those with a
-    weight > 0 when ``weights`` is given)": the actions a node of these particles
-    offers (:meth:`GenerativePOMDP.applicable`)."""
-    live = (
-        list(states)
-        if weights is None
-        else [s for s, w in zip(states, weights, strict=True) if w > 0.0]
-    )
+    weight > 0 when ``weights`` is given, and alive when ``alive`` is)": the actions a
+    node of these particles offers (:meth:`GenerativePOMDP.applicable`). The live
+    particles are listed at the first call (a node asks only when it expands)."""
     applicable = pomdp.applicable
-    return lambda a: any(applicable(s, a) for s in live)
+    live: list[Any] | None = None
+
+    def keep(a: Hashable) -> bool:
+        nonlocal live
+        if live is None:
+            live = [
+                s
+                for i, s in enumerate(states)
+                if (weights is None or weights[i] > 0.0) and (alive is None or alive[i])
+            ]
+        return any(applicable(s, a) for s in live)
+
+    return keep

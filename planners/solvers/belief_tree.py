@@ -359,11 +359,7 @@ class BeliefTreeSearch:
     def offered(self, h: int) -> Keep:
         """The actions node ``h`` offers: those applicable in one of its live,
         weighted particles."""
-        live = [
-            s for s, w, ok in zip(self.states[h], self.weights[h].tolist(), self.alive[h],
-                                  strict=True) if w > 0.0 and ok
-        ]  # fmt: skip
-        return legal_in(self.pomdp, live)
+        return legal_in(self.pomdp, self.states[h], self.weights[h], self.alive[h])
 
     def simulate(self, h: int, d: int) -> float:
         """One descent from belief node ``h`` at depth ``d``; returns its return."""

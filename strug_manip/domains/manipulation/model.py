@@ -105,6 +105,9 @@ MAX_STEPS = 10
 #: next draw, at most this many times: an episode is about the task, not about the
 #: generator's rare cabinets whose parts are all out of the arm's reach.
 MAX_DRAWS = 20
+#: The outcomes of an action that could not start (nothing moved): no base and arm
+#: reach it, or its plan cannot be made in the model.
+CANNOT_START = (str(Status.IK_INFEASIBLE), NOT_APPLICABLE)
 #: Particles drawn from perception (the runner's ``n_particles`` is capped to this:
 #: every particle is a compiled world and a twin).
 MAX_PARTICLES = 24
@@ -412,18 +415,13 @@ class ManipulationPOMDP(GenerativePOMDP):
             return False
         if a.skill == "Pick":
             return True
-        spec = w.particles[s.origin].spec
+        if a.skill == "Place":  # a pose to place at (the skills the twin would try)
+            return bool(self._skills(s.origin, a, s.sim)[0])
         link = self.parts[a.part].links[s.origin]
         if link is None:
-            return a.skill != "Place"
-        part = spec.part(link)
-        q, T = _position(world, part.joint), world.cabinet_pose()
-        if a.skill == "Place":
-            try:
-                place_targets(spec, link, q, T)
-            except ConfigError:
-                return False
             return True
+        part = w.particles[s.origin].spec.part(link)
+        q, T = _position(world, part.joint), world.cabinet_pose()
         if part.handle_pos is None:
             return True
         q0 = w.particles[s.origin].q.get(part.joint, 0.0)
@@ -734,7 +732,7 @@ class ManipulationPOMDP(GenerativePOMDP):
             reward = self._reward(world.scene.cabinet_spec, real.target, world, out)
         # An action the robot could not start from here fails the same way again until
         # something changes: its plan is made against the same model, in the same state.
-        if status not in (NOT_APPLICABLE, str(Status.IK_INFEASIBLE)):
+        if status not in CANNOT_START:
             real.refused.clear()
         else:
             real.refused.add(a)
@@ -767,7 +765,7 @@ class ManipulationPOMDP(GenerativePOMDP):
         states = [b.states[j] for j in order]
         links = self.parts[a.part].links if a.skill == "Place" else None
         has = [s for s in states if links is None or links[s.origin] is not None]
-        cannot = {STATUS_CODES[NOT_APPLICABLE], STATUS_CODES[str(Status.IK_INFEASIBLE)]}
+        cannot = {STATUS_CODES[x] for x in CANNOT_START}
         for s in has:  # the twins' outcomes are cached from the search, mostly
             if self.step(s, a, rng).obs.key[0] not in cannot:
                 return s.origin, s.sim
