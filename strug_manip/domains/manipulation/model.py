@@ -68,6 +68,7 @@ from strug_manip.domains.manipulation import belief as belief_mod
 from strug_manip.domains.manipulation.actions import (
     DEFAULT_PROBES,
     SKILLS,
+    TABLE,
     CataloguePart,
     ManipAction,
     action_list,
@@ -105,6 +106,10 @@ MAX_STEPS = 10
 #: next draw, at most this many times: an episode is about the task, not about the
 #: generator's rare cabinets whose parts are all out of the arm's reach.
 MAX_DRAWS = 20
+#: ``Place(table)`` with a side grasp starts this much above the object's spot and comes
+#: down to it [m]: the object held level clears the table top (a top grasp comes down
+#: from above anyway).
+TABLE_LIFT = 0.03
 #: Particles drawn from perception (the runner's ``n_particles`` is capped to this:
 #: every particle is a compiled world and a twin).
 MAX_PARTICLES = 24
@@ -204,6 +209,7 @@ class ManipulationPOMDP(GenerativePOMDP):
         self._classes: tuple[tuple[str | None, ...], ...] = ()
         self.targets: tuple[str | None, ...] = ()
         self._belief: ParticleBelief | None = None
+        self._home = np.eye(4)
         self.timers = Timers()
         self._space = self._make_space((ManipAction("Pick", grasp="top"),))
 
@@ -305,6 +311,7 @@ class ManipulationPOMDP(GenerativePOMDP):
                     raise
         world.reset()
         self.real = RealEpisode(world, seed, target, point, [], [])
+        self._home = world.object_pose().copy()  # where Place(table) puts it back
         self.timers = Timers(setup=time.perf_counter() - t0)
         return ManipState(REAL, world.snapshot(), 0)
 
@@ -410,7 +417,7 @@ class ManipulationPOMDP(GenerativePOMDP):
         world = tw.world
         if (a.skill == "Place") != holds_object(world):
             return False
-        if a.skill == "Pick":
+        if a.skill == "Pick" or a.part == TABLE:
             return True
         spec = w.particles[s.origin].spec
         link = self.parts[a.part].links[s.origin]
@@ -632,6 +639,8 @@ class ManipulationPOMDP(GenerativePOMDP):
             # The object's table is far from the cabinet: one planning world serves
             # every model, so the base placement is found once for all of them.
             return [Pick("object", a.grasp)], w.fetch(0)
+        if a.skill == "Place" and a.part == TABLE:
+            return [Place("object", self._home, TABLE_LIFT)], None
         part = self.parts[a.part]
         if a.skill == "Place":
             link = part.links[i]
@@ -765,7 +774,7 @@ class ManipulationPOMDP(GenerativePOMDP):
             return 0, w.initial[0]
         order = np.argsort(-b.weights, kind="stable")
         states = [b.states[j] for j in order]
-        links = self.parts[a.part].links if a.skill == "Place" else None
+        links = self.parts[a.part].links if a.skill == "Place" and a.part != TABLE else None
         has = [s for s in states if links is None or links[s.origin] is not None]
         cannot = {STATUS_CODES[NOT_APPLICABLE], STATUS_CODES[str(Status.IK_INFEASIBLE)]}
         for s in has:  # the twins' outcomes are cached from the search, mostly
