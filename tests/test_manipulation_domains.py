@@ -446,3 +446,25 @@ def test_an_action_the_real_robot_could_not_start_is_refused_until_something_cha
         d.real.refused.clear()
         d.real.now = 0
         d.condition(belief)
+
+
+def test_the_object_picked_too_early_goes_back_onto_the_table(drawer_episode):
+    """One hand: an object picked before the target is open would be a dead end.
+    Place(table) puts it back where it was picked, empty-handed and not done."""
+    from strug_manip.domains.manipulation.actions import TABLE
+
+    d, _, belief = drawer_episode
+    rng = np.random.default_rng(0)
+    back = ManipAction("Place", TABLE)
+    assert back in d.action_space().discretized
+    assert d.action_space().name(back) == "Place(table)"
+    s = belief.states[1]
+    assert not d.applicable(s, back)
+    held = d.step(s, ManipAction("Pick", grasp="top"), rng).state
+    assert d.applicable(held, back)
+    down = d.step(held, back, rng)
+    assert not d._holding(down.state) and down.reward == 0.0 and not down.done, down.obs.summary
+    tw = d.worlds.twins[s.origin]
+    tw.restore(down.state.sim)
+    assert np.linalg.norm(tw.world.object_pose()[:3, 3] - d._home[:3, 3]) < 0.03
+    assert d.applicable(down.state, ManipAction("Pick", grasp="top"))

@@ -44,12 +44,18 @@ SKILLS: tuple[str, ...] = ("OpenDrawer", "OpenDoor", "Pick", "Place", "Push", "P
 DEFAULT_PROBES: tuple[str, ...] = ("PullH",)
 
 
+#: ``ManipAction.part`` of the ``Place`` back onto the table, where the object was
+#: picked from.
+TABLE = -1
+
+
 class ManipAction(NamedTuple):
     """One action.
 
     Attributes:
         skill: one of :data:`SKILLS`.
-        part: index of the :class:`CataloguePart` (-1: none, for Pick).
+        part: index of the :class:`CataloguePart` (-1: none, for Pick; :data:`TABLE`
+            for a Place).
         hypothesis: index into that part's hypotheses (openings), else -1.
         grasp: ``top`` or ``side`` for Pick, else "".
     """
@@ -144,7 +150,9 @@ def action_list(
     """Every action of an episode: per part, an opening per hypothesis (``OpenDrawer``
     for a drawer hypothesis, ``OpenDoor`` for a hinge) and the probes; per part a
     ``Place``; ``Pick`` with the grasps the task needs (``top`` into drawers, ``side``
-    into cells behind doors and onto shelves)."""
+    into cells behind doors and onto shelves); ``Place`` back onto the table
+    (:data:`TABLE`: a robot with one hand that picked before the part was open puts the
+    object down to open it)."""
     out: list[ManipAction] = []
     for k, part in enumerate(parts):
         for h, kind in enumerate(part.hypotheses):
@@ -156,6 +164,7 @@ def action_list(
     grasps = {"opendrawer": ("top",), "opendoor": ("side",), "shelf": ("side",)}[task]
     out.extend(ManipAction("Pick", grasp=g) for g in grasps)
     out.extend(ManipAction("Place", k) for k in range(len(parts)))
+    out.append(ManipAction("Place", TABLE))
     return tuple(out)
 
 
@@ -163,6 +172,8 @@ def describe(a: ManipAction, parts: Sequence[CataloguePart]) -> str:
     """``OpenDrawer(part@(y=+0.10, z=0.62) as drawer)``, ``Pick(top)``, ..."""
     if a.skill == "Pick":
         return f"Pick({a.grasp})"
+    if a.skill == "Place" and a.part == TABLE:
+        return "Place(table)"
     name = parts[a.part].describe() if 0 <= a.part < len(parts) else f"part {a.part}"
     if a.hypothesis >= 0:
         return f"{a.skill}({name} as {parts[a.part].hypotheses[a.hypothesis]})"

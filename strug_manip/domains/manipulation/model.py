@@ -68,6 +68,7 @@ from strug_manip.domains.manipulation import belief as belief_mod
 from strug_manip.domains.manipulation.actions import (
     DEFAULT_PROBES,
     SKILLS,
+    TABLE,
     CataloguePart,
     ManipAction,
     action_list,
@@ -108,6 +109,10 @@ MAX_DRAWS = 20
 #: The outcomes of an action that could not start (nothing moved): no base and arm
 #: reach it, or its plan cannot be made in the model.
 CANNOT_START = (str(Status.IK_INFEASIBLE), NOT_APPLICABLE)
+#: ``Place(table)`` with a side grasp starts this much above the object's spot and comes
+#: down to it [m]: the object held level clears the table top (a top grasp comes down
+#: from above anyway).
+TABLE_LIFT = 0.03
 #: Particles drawn from perception (the runner's ``n_particles`` is capped to this:
 #: every particle is a compiled world and a twin).
 MAX_PARTICLES = 24
@@ -207,6 +212,7 @@ class ManipulationPOMDP(GenerativePOMDP):
         self._classes: tuple[tuple[str | None, ...], ...] = ()
         self.targets: tuple[str | None, ...] = ()
         self._belief: ParticleBelief | None = None
+        self._home = np.eye(4)
         self.timers = Timers()
         self._space = self._make_space((ManipAction("Pick", grasp="top"),))
 
@@ -308,6 +314,7 @@ class ManipulationPOMDP(GenerativePOMDP):
                     raise
         world.reset()
         self.real = RealEpisode(world, seed, target, point, [], [])
+        self._home = world.object_pose().copy()  # where Place(table) puts it back
         self.timers = Timers(setup=time.perf_counter() - t0)
         return ManipState(REAL, world.snapshot(), 0)
 
@@ -413,7 +420,7 @@ class ManipulationPOMDP(GenerativePOMDP):
         world = tw.world
         if (a.skill == "Place") != holds_object(world):
             return False
-        if a.skill == "Pick":
+        if a.skill == "Pick" or a.part == TABLE:
             return True
         if a.skill == "Place":  # a pose to place at (the skills the twin would try)
             return bool(self._skills(s.origin, a, s.sim)[0])
@@ -630,6 +637,8 @@ class ManipulationPOMDP(GenerativePOMDP):
             # The object's table is far from the cabinet: one planning world serves
             # every model, so the base placement is found once for all of them.
             return [Pick("object", a.grasp)], w.fetch(0)
+        if a.skill == "Place" and a.part == TABLE:
+            return [Place("object", self._home, TABLE_LIFT)], None
         part = self.parts[a.part]
         if a.skill == "Place":
             link = part.links[i]
@@ -763,7 +772,7 @@ class ManipulationPOMDP(GenerativePOMDP):
             return 0, w.initial[0]
         order = np.argsort(-b.weights, kind="stable")
         states = [b.states[j] for j in order]
-        links = self.parts[a.part].links if a.skill == "Place" else None
+        links = self.parts[a.part].links if a.skill == "Place" and a.part != TABLE else None
         has = [s for s in states if links is None or links[s.origin] is not None]
         cannot = {STATUS_CODES[x] for x in CANNOT_START}
         for s in has:  # the twins' outcomes are cached from the search, mostly
