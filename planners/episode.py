@@ -153,7 +153,9 @@ def run_episode(
         total += disc * reward
         disc *= pomdp.discount
         if not done:
-            belief, _ = update_belief(pomdp, belief, action, obs, belief_rng)
+            belief, _ = update_belief(
+                pomdp, belief, action, obs, belief_rng, resample_ess=pomdp.resample_ess
+            )
             belief = pomdp.condition(belief)
             if observe is not None:
                 observe(action, obs)  # lets a planner keep its tree (reuse_tree)

@@ -223,6 +223,12 @@ class GenerativePOMDP(ABC):
             exactly (by :meth:`observation_key`): the belief update keeps the particles
             whose simulated observation matches, and the belief tree merges repeats.
             False when they are real values or vectors weighted with ``obs_loglik``.
+        resample_ess: the runner's belief update resamples when the effective sample
+            size falls below this fraction of the particles (optional, default 0.5; see
+            :func:`planners.belief.update_belief`). A domain whose particles are
+            distinct, deterministic models and that cannot propose new ones sets it
+            near 0: resampling there only copies the likeliest models and drops the
+            others for good.
     """
 
     name: str
@@ -230,6 +236,7 @@ class GenerativePOMDP(ABC):
     max_steps: int
     max_abs_reward: float
     discrete_observations: bool
+    resample_ess: float = 0.5
 
     @abstractmethod
     def sample_initial_state(self, rng: np.random.Generator) -> Any:

@@ -181,6 +181,11 @@ class ManipulationPOMDP(GenerativePOMDP):
     max_steps = MAX_STEPS
     max_abs_reward = 10.0
     discrete_observations = False
+    #: Never resample the real belief: every particle is a distinct cabinet model whose
+    #: twin is deterministic, so copies of the likeliest add nothing, and a model
+    #: resampled away is gone for good (no new ones are drawn mid-episode): after one
+    #: surprising grasp_lost, a belief of copies of one wrong model cannot recover.
+    resample_ess = 1e-9
 
     def __init__(
         self,
@@ -210,6 +215,7 @@ class ManipulationPOMDP(GenerativePOMDP):
         self.worlds: ParticleWorlds | None = None
         self.parts: tuple[CataloguePart, ...] = ()
         self._classes: tuple[tuple[str | None, ...], ...] = ()
+        self._reps: tuple[tuple[int, ...], ...] = ()
         self.targets: tuple[str | None, ...] = ()
         self._belief: ParticleBelief | None = None
         self._home = np.eye(4)
@@ -291,7 +297,42 @@ class ManipulationPOMDP(GenerativePOMDP):
                 done[s] = ManipState(s.origin, tw.snapshot(), s.t, s.last)
             states.append(done[s])
         self._belief = ParticleBelief(states, belief.weights, belief.origin)
+        self._reps = self._representatives(self._belief)
         return self._belief
+
+    def _representatives(self, belief: ParticleBelief) -> tuple[tuple[int, ...], ...]:
+        """Per catalogued part and hypothesis, the particle whose grasp and joint the
+        action follows: the likeliest particle of ``belief`` that holds the hypothesis
+        (ties: the lowest index; none with weight: the previous one).
+
+        Why not a fixed holder: particles of one hypothesis differ in where the hinge
+        is (perception's noise), and the full robot's opening slips off a handle when
+        the joint it follows is a few centimetres off. An opening that failed in the
+        real world moves weight from the particles whose twins followed the joint
+        successfully to those whose did not, so the next likeliest holder's joint is
+        tried next; and a belief that has settled on one particle opens the part along
+        that particle's own joint. Within one search the representatives are fixed
+        (they change after a real step), so every search sees one POMDP."""
+        mass = np.zeros(len(self._classes))
+        for s, wt in zip(belief.states, belief.weights.tolist(), strict=True):
+            if s.origin >= 0:
+                mass[s.origin] += wt
+        out = []
+        for k, part in enumerate(self.parts):
+            row = []
+            for h, kind in enumerate(part.hypotheses):
+                held = [i for i in range(len(mass)) if self._classes[i][k] == kind]
+                best = max(held, key=lambda i: (mass[i], -i), default=None)
+                row.append(best if best is not None and mass[best] > 0 else self._reps[k][h])
+            out.append(tuple(row))
+        return tuple(out)
+
+    def _rep(self, a: ManipAction) -> int:
+        """The particle whose grasp and joint opening or probe ``a`` follows (-1: Pick
+        and Place, which follow none)."""
+        if a.skill in ("Pick", "Place"):
+            return -1
+        return self._reps[a.part][max(a.hypothesis, 0)]
 
     def sample_initial_state(self, rng: np.random.Generator) -> ManipState:
         """A new real cabinet and its target (module docstring)."""
@@ -347,6 +388,7 @@ class ManipulationPOMDP(GenerativePOMDP):
         self.targets = tuple(self._target_link(i, real.point) for i in range(len(w)))
         self._classes = tuple(tuple(self._movable_kind(i, k) for k in range(len(self.parts)))
                               for i in range(len(w)))  # fmt: skip
+        self._reps = tuple(part.holders for part in self.parts)
         self._space = self._make_space(action_list(self.parts, self.task, self.probes))
         self.timers.setup += time.perf_counter() - t0
         belief = ParticleBelief.from_states([ManipState(i, w.initial[i], 0) for i in range(len(w))])
@@ -358,7 +400,7 @@ class ManipulationPOMDP(GenerativePOMDP):
         if s.origin == REAL:
             return self._real_step(s, a, rng)
         w = self._need_worlds()
-        key = (s.origin, s.sim.key, a)
+        key = (s.origin, s.sim.key, a, self._rep(a))
         hit = w.outcomes.lookup(key)
         if hit is None:
             t0 = time.perf_counter()
@@ -402,13 +444,14 @@ class ManipulationPOMDP(GenerativePOMDP):
         if real is not None and s.t == real.now and a in real.refused:
             return False
         w = self._need_worlds()
-        key = (s.origin, s.sim.key, a)
+        a = self._check_action(a)
+        key = (s.origin, s.sim.key, a, self._rep(a))
         hit = w.outcomes.get(key)  # a peek: the search's hit rate counts steps only
         if hit is not None:
             return hit[1][0] != STATUS_CODES[NOT_APPLICABLE]
         can = w.can_start.get(key)
         if can is None:
-            can = self._can_start(s, self._check_action(a))
+            can = self._can_start(s, a)
             w.can_start.store(key, can)
         return can
 
@@ -655,7 +698,7 @@ class ManipulationPOMDP(GenerativePOMDP):
                 return [], None  # the part is not open enough: no pose to place at
             return [Place("object", t.p, t.lift) for t in tgts], None
         h = max(a.hypothesis, 0)
-        holder = part.holders[h]
+        holder = self._reps[a.part][h]
         spec_part = w.particles[holder].spec.part(part.links[holder])
         q = w.particles[holder].q.get(spec_part.joint, 0.0)
         T = w.pose(holder)
@@ -758,14 +801,15 @@ class ManipulationPOMDP(GenerativePOMDP):
 
     def _likeliest(self, a: ManipAction, rng: np.random.Generator) -> tuple[int, WorldState]:
         """The model the real robot plans ``a`` against, and its state: for an opening
-        or a probe, the hypothesis's holder (in its likeliest current state); for Pick
+        or a probe, the hypothesis's representative (:meth:`_representatives`, in its
+        likeliest current state); for Pick
         and Place, the likeliest particle that has the action's part and whose twin can
         make the action (not ``ik_infeasible``, not :data:`NOT_APPLICABLE`; the search
         chose the action for the models that can, and a plan made in one that cannot
         fails before anything moves), else the likeliest that has the part."""
         w = self._need_worlds()
         if a.skill not in ("Pick", "Place"):
-            holder = self.parts[a.part].holders[max(a.hypothesis, 0)]
+            holder = self._rep(a)
             return holder, self._best_state(holder) or w.initial[holder]
         b = self._belief
         if b is None:
