@@ -137,3 +137,19 @@ def test_resampling_keeps_origins_and_size(rng) -> None:
     assert set(post.origin.tolist()) <= {3, 9}
     assert all(post.states[i] == post.origin[i] for i in range(400))
     assert abs(post.origin_weights(10)[9] - 0.75) < 0.01
+
+
+def test_a_domain_that_never_resamples_keeps_every_particle():
+    """``resample_ess`` near 0 (a domain of distinct deterministic models) leaves an
+    unlikely particle in the posterior with its small weight instead of resampling it
+    away, so later evidence can bring it back."""
+    pomdp = make_domain("lightdark1d")
+    rng = np.random.default_rng(0)
+    belief = pomdp.initial_belief(rng, 50)
+    o = 5.0
+    post, info = update_belief(pomdp, belief, 2, o, rng, resample_ess=1e-9)
+    assert info.method == "likelihood" and len(post) == 50
+    assert len(set(post.origin.tolist())) == 50
+    assert post.ess() < 25  # the default 0.5 would have resampled
+    again, _ = update_belief(pomdp, belief, 2, o, np.random.default_rng(0))
+    assert len(set(again.origin.tolist())) < 50

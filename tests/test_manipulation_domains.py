@@ -8,13 +8,14 @@ import dataclasses
 import numpy as np
 import pytest
 
+from planners.belief import ParticleBelief
 from planners.errors import ConfigError, UnknownNameError
 from planners.solvers import SOLVERS, make_solver
 from strug_manip.domains import MANIPULATION_DOMAINS, make_domain
 from strug_manip.domains.manipulation.actions import ManipAction, part_kind
 from strug_manip.domains.manipulation.state import ManipObservation
 from strug_manip.experiments.episode import run_episode
-from strug_manip.objects.hypotheses import model_of
+from strug_manip.objects.hypotheses import BelievedJoint, model_of
 
 #: A drawers-only cabinet whose top drawer the robot opens (``tools/eval_skills.py``).
 SEED = 11
@@ -419,28 +420,38 @@ def test_actions_that_cannot_start_are_not_applicable_and_the_twin_agrees(drawer
     assert others and all(d._can_start(step.state, b) for b in others)
 
 
-def test_an_action_the_real_robot_could_not_start_is_refused_until_something_changes(
+def test_an_action_that_failed_on_the_real_robot_is_refused_until_a_step_ends_ok(
     drawer_episode,
 ):
-    """A real step that could not start (here a Place with nothing held) is refused at
-    the root, whatever the twins say, and the refusal ends with a step that did
-    something (a Pick)."""
+    """A real step that failed (here a Place with nothing held) is refused at the root,
+    whatever the twins say; an opening only while it follows the particle it failed
+    with; the refusals end with a step that ends ok (a Pick)."""
     d, s0, belief = drawer_episode
     rng = np.random.default_rng(0)
     place, pick = ManipAction("Place", 0), ManipAction("Pick", grasp="top")
+    opening = next(a for a in d.action_space().discretized if a.skill == "OpenDrawer")
+    old = d._reps
     try:
         failed = d.step(s0, place, rng)
         assert "not_applicable" in failed.obs.summary
-        assert d.real.refused == {place} and d.real.now == 1
+        assert d.real.refused == {(place, -1)} and d.real.now == 1
         root = dataclasses.replace(belief.states[0], t=1)
-        d.real.refused.add(pick)  # as if the real Pick had found no IK
+        assert not d.applicable(root, place)
+        d.real.refused.add((pick, -1))  # as if the real Pick had found no IK
         assert not d.applicable(root, pick)
         assert d.applicable(dataclasses.replace(root, t=2), pick)  # deeper: the twins
-        d.real.refused.discard(pick)
+        d.real.refused.add((opening, d._rep(opening)))  # as if it had slipped
+        assert not d.applicable(root, opening)
+        k, h = opening.part, opening.hypothesis
+        d._reps = tuple(tuple(r + 1 if (k2, h2) == (k, h) else r for h2, r in enumerate(row))
+                        for k2, row in enumerate(old))  # fmt: skip
+        assert d.applicable(root, opening)  # another particle's joint: offered again
+        d.real.refused -= {(pick, -1), (opening, old[k][h])}
         done = d.step(failed.state, pick, rng)
         assert done.obs.key[1] == 1.0, done.obs.summary
         assert not d.real.refused and d.real.now == 2
     finally:
+        d._reps = old
         d.real.world.restore(s0.sim)
         d.real.weighed = b""
         d.real.refused.clear()
@@ -468,3 +479,42 @@ def test_the_object_picked_too_early_goes_back_onto_the_table(drawer_episode):
     tw.restore(down.state.sim)
     assert np.linalg.norm(tw.world.object_pose()[:3, 3] - d._home[:3, 3]) < 0.03
     assert d.applicable(down.state, ManipAction("Pick", grasp="top"))
+
+
+def test_an_opening_follows_the_likeliest_particle_of_its_hypothesis(drawer_episode):
+    """An opening's grasp and joint are the likeliest holder's of its hypothesis (the
+    first holder while the belief is uniform), a hypothesis whose holders all lost
+    their weight keeps its last one, and the twins' outcomes are cached per holder."""
+    d, _, belief = drawer_episode
+    n = len(d.worlds)
+    found = [(k, h, [i for i in range(n) if d._classes[i][k] == kind])
+             for k, part in enumerate(d.parts) for h, kind in enumerate(part.hypotheses)
+             if kind != "shelf"]  # fmt: skip
+    k, h, held = next(f for f in found if len(f[2]) >= 2)
+    assert d._representatives(belief)[k][h] == held[0] == d._reps[k][h]
+    other = held[-1]
+    w = np.array([1.0 if s.origin == other else 0.0 for s in belief.states])
+    reps = d._representatives(ParticleBelief(belief.states, w, belief.origin))
+    assert reps[k][h] == other
+    lost = [f for f in found if other not in f[2]]
+    assert all(reps[k2][h2] == d._reps[k2][h2] for k2, h2, _ in lost)
+    opening = "OpenDrawer" if d.parts[k].hypotheses[h] == "drawer" else "OpenDoor"
+    a, s, rng = ManipAction(opening, k, h), belief.states[0], np.random.default_rng(0)
+    old = d._reps
+    try:
+        d.step(s, a, rng)
+        joint = d._skills(s.origin, a, s.sim)[0][0].joint
+        d._reps = reps
+        misses = d.worlds.outcomes.misses
+        d.step(s, a, rng)
+        assert d.worlds.outcomes.misses == misses + 1
+        moved = d._skills(s.origin, a, s.sim)[0][0].joint
+        spec = d.worlds.particles[other].spec
+        q = d.worlds.particles[other].q
+        part = spec.part(d.parts[k].links[other])
+        want = BelievedJoint.of_part(part, q.get(part.joint, 0.0), d.worlds.pose(other))
+        np.testing.assert_allclose(moved.axis, want.axis)
+        np.testing.assert_allclose(moved.origin, want.origin)
+        assert not (np.allclose(moved.axis, joint.axis) and np.allclose(moved.origin, joint.origin))
+    finally:
+        d._reps = old

@@ -140,9 +140,11 @@ class RealEpisode:
         outcomes: the full robot's outcomes, one per step.
         weighed: the cabinet's joints (to the mm, as bytes) when the belief last
             weighed a cloud (``ManipObservation.news``); empty before the first.
-        refused: the actions the full robot could not start (``ik_infeasible`` or
-            not applicable: nothing moved) since the last real step that did
-            something; :meth:`ManipulationPOMDP.applicable` refuses them at the root.
+        refused: the actions that failed on the full robot since its last step that
+            ended ``ok``, each with the particle it followed
+            (:meth:`ManipulationPOMDP._rep`); :meth:`ManipulationPOMDP.applicable`
+            refuses them at the root while that particle is still their
+            representative.
         now: the step count of the states after the last real step (the root's).
     """
 
@@ -153,7 +155,7 @@ class RealEpisode:
     frames: list[CameraFrame]
     outcomes: list[Outcome]
     weighed: bytes = b""
-    refused: set[ManipAction] = field(default_factory=set)
+    refused: set[tuple[ManipAction, int]] = field(default_factory=set)
     now: int = 0
 
 
@@ -429,19 +431,25 @@ class ManipulationPOMDP(GenerativePOMDP):
           A part ``s``'s model lacks stays applicable: acting on it is how the robot
           learns that the model is wrong.
 
-        At the root (the states of the current real step), an action the full robot
-        has just failed to start (``ik_infeasible``, not applicable), with nothing
-        changed since, is refused whatever the twins say: the robot would plan it
-        against the same model in the same state and fail again (the twins and the
-        full robot disagree on such actions, and the observation, which no particle
-        predicted, moves no weight: the search would choose it every step).
+        At the root (the states of the current real step), an action that failed on
+        the full robot (any status but ``ok``) since its last ``ok`` step is refused
+        whatever the twins say, as long as it would follow the same particle's grasp
+        and joint: the robot would plan it against the same model in nearly the same
+        state and fail the same way again. The twins and the full robot disagree on
+        such actions, and when every weighted particle predicted the failure, or none
+        did, the observation moves no weight and the search chooses the action again
+        (held-out door episodes: the same ``grasp_lost`` opening nine times; a
+        ``Place`` stopped at ``cabinet_moved`` three times, which added up to a drag).
+        When the belief moves the hypothesis to another particle, the opening
+        follows that particle's joint, and is offered again.
 
         The real state: always True (the real robot plans against the likeliest model).
         """
         if s.origin == REAL:
             return True
         real = self.real
-        if real is not None and s.t == real.now and a in real.refused:
+        refused = real.refused if real is not None and s.t == real.now else ()
+        if refused and (self._check_action(a), self._rep(a)) in refused:
             return False
         w = self._need_worlds()
         a = self._check_action(a)
@@ -782,12 +790,12 @@ class ManipulationPOMDP(GenerativePOMDP):
             status, holding, summary = out.status, out.holding, out.summary()
             motion = self._handle(REAL, a, world) - before
             reward = self._reward(world.scene.cabinet_spec, real.target, world, out)
-        # An action the robot could not start from here fails the same way again until
-        # something changes: its plan is made against the same model, in the same state.
-        if status not in CANNOT_START:
+        # A failed action fails the same way again until something changes: its plan
+        # is made against the same model, in nearly the same state (applicable()).
+        if status == str(Status.OK):
             real.refused.clear()
         else:
-            real.refused.add(a)
+            real.refused.add((a, self._rep(a)))
         real.now = s.t + 1
         frame = take_views(world, 1)[0]
         real.frames.append(frame)
