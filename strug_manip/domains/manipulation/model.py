@@ -438,8 +438,8 @@ class ManipulationPOMDP(GenerativePOMDP):
         state and fail the same way again. The twins and the full robot disagree on
         such actions, and when every weighted particle predicted the failure, or none
         did, the observation moves no weight and the search chooses the action again
-        (held-out door episodes: the same ``grasp_lost`` opening nine times; a
-        ``Place`` stopped at ``cabinet_moved`` three times, which added up to a drag).
+        (on held-out door episodes, one slipping opening until the steps ran out, and a
+        ``Place`` stopped at ``cabinet_moved`` until the stops added up to a drag).
         When the belief moves the hypothesis to another particle, the opening
         follows that particle's joint, and is offered again.
 
