@@ -15,7 +15,8 @@ episode seed: tune on one range, report on another.
 
 What it prints, per domain and solver: episodes that earned the task's +10; mean
 return ± standard error; the median of the episodes' median planning time per step and
-the median episode wall time. Per domain, the failures by cause, counted per episode:
+the median episode wall time. Per domain, the failures by cause, counted per episode
+(per solver in brackets):
 
 * ``dragged``: the episode ended at -10 (the cabinet more than 0.1 m from its start);
 * ``placed elsewhere``: a real ``Place`` ran ``ok`` and the episode earned nothing (the
@@ -72,9 +73,12 @@ def report(records: list[dict]) -> str:
         lines.append(f"| {d} | {s} | {statistics.mean(x):+.2f} ± {se:.2f} |")
     for d in sorted({r["domain"] for r in records}):
         rs = [r for r in records if r["domain"] == d]
-        causes = collections.Counter(cause(r) for r in rs if not r["success"])
+        failed = [r for r in rs if not r["success"]]
+        causes = collections.Counter(cause(r) for r in failed)
         lines.append(f"\n{d}: failures by cause ({sum(causes.values())} of {len(rs)} episodes)")
-        lines += [f"  {n:4d}  {c}" for c, n in causes.most_common()]
+        for c, n in causes.most_common():
+            who = collections.Counter(r["solver"] for r in failed if cause(r) == c)
+            lines.append(f"  {n:4d}  {c} ({', '.join(f'{s} {k}' for s, k in sorted(who.items()))})")
         total = {k: sum(r["report"]["time"].get(k, 0.0) for r in rs) for k in TIME_PARTS}
         t = sum(total.values()) or 1.0
         parts = ", ".join(f"{k} {v / t:.0%}" for k, v in total.items())
