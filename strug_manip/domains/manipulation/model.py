@@ -109,6 +109,12 @@ MAX_DRAWS = 20
 #: The outcomes of an action that could not start (nothing moved): no base and arm
 #: reach it, or its plan cannot be made in the model.
 CANNOT_START = (str(Status.IK_INFEASIBLE), NOT_APPLICABLE)
+#: The outcomes of an action that, tried again from nearly the same state against the
+#: same model, ends the same way: it could not start; its grasp slipped off a handle
+#: that does not turn about the joint it followed; it stopped because it slid the
+#: cabinet (again, the slides add up to a drag). A ``collision`` or a missing motion
+#: plan is not among them: the next attempt plans a new path.
+REPEATS_ITSELF = (*CANNOT_START, str(Status.GRASP_LOST), str(Status.CABINET_MOVED))
 #: ``Place(table)`` with a side grasp starts this much above the object's spot and comes
 #: down to it [m]: the object held level clears the table top (a top grasp comes down
 #: from above anyway).
@@ -140,8 +146,9 @@ class RealEpisode:
         outcomes: the full robot's outcomes, one per step.
         weighed: the cabinet's joints (to the mm, as bytes) when the belief last
             weighed a cloud (``ManipObservation.news``); empty before the first.
-        refused: the actions that failed on the full robot since its last step that
-            ended ``ok``, each with the particle it followed
+        refused: the actions that failed on the full robot in a way that repeats
+            itself (:data:`REPEATS_ITSELF`) since its last step that ended ``ok``, each
+            with the particle it followed
             (:meth:`ManipulationPOMDP._rep`); :meth:`ManipulationPOMDP.applicable`
             refuses them at the root while that particle is still their
             representative.
@@ -432,16 +439,17 @@ class ManipulationPOMDP(GenerativePOMDP):
           learns that the model is wrong.
 
         At the root (the states of the current real step), an action that failed on
-        the full robot (any status but ``ok``) since its last ``ok`` step is refused
-        whatever the twins say, as long as it would follow the same particle's grasp
-        and joint: the robot would plan it against the same model in nearly the same
-        state and fail the same way again. The twins and the full robot disagree on
-        such actions, and when every weighted particle predicted the failure, or none
-        did, the observation moves no weight and the search chooses the action again
-        (on held-out door episodes, one slipping opening until the steps ran out, and a
-        ``Place`` stopped at ``cabinet_moved`` until the stops added up to a drag).
-        When the belief moves the hypothesis to another particle, the opening
-        follows that particle's joint, and is offered again.
+        the full robot in a way that repeats itself (:data:`REPEATS_ITSELF`) since the
+        last step that ended ``ok`` is refused whatever the twins say, as long as it
+        would follow the same particle's grasp and joint: the robot would plan it
+        against the same model in nearly the same state and fail the same way again.
+        The twins and the full robot disagree on such actions, and when every weighted
+        particle predicted the failure, or none did, the observation moves no weight
+        and the search chooses the action again (on held-out door episodes, one
+        slipping opening until the steps ran out, and a ``Place`` stopped at
+        ``cabinet_moved`` until the stops added up to a drag). When the belief moves
+        the hypothesis to another particle, the opening follows that particle's joint
+        and is offered again.
 
         The real state: always True (the real robot plans against the likeliest model).
         """
@@ -790,11 +798,11 @@ class ManipulationPOMDP(GenerativePOMDP):
             status, holding, summary = out.status, out.holding, out.summary()
             motion = self._handle(REAL, a, world) - before
             reward = self._reward(world.scene.cabinet_spec, real.target, world, out)
-        # A failed action fails the same way again until something changes: its plan
-        # is made against the same model, in nearly the same state (applicable()).
+        # Such a failure repeats itself until something changes: the plan is made
+        # against the same model, in nearly the same state (applicable()).
         if status == str(Status.OK):
             real.refused.clear()
-        else:
+        elif status in REPEATS_ITSELF:
             real.refused.add((a, self._rep(a)))
         real.now = s.t + 1
         frame = take_views(world, 1)[0]
