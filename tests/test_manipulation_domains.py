@@ -12,7 +12,7 @@ from planners.belief import ParticleBelief
 from planners.errors import ConfigError, UnknownNameError
 from planners.solvers import SOLVERS, make_solver
 from strug_manip.domains import MANIPULATION_DOMAINS, make_domain
-from strug_manip.domains.manipulation.actions import ManipAction, part_kind
+from strug_manip.domains.manipulation.actions import TABLE, ManipAction, part_kind
 from strug_manip.domains.manipulation.model import REPEATS_ITSELF
 from strug_manip.domains.manipulation.state import ManipObservation
 from strug_manip.experiments.episode import run_episode
@@ -433,7 +433,7 @@ def test_an_action_that_failed_on_the_real_robot_is_refused_until_a_step_ends_ok
     rng = np.random.default_rng(0)
     place, pick = ManipAction("Place", 0), ManipAction("Pick", grasp="top")
     opening = next(a for a in d.action_space().discretized if a.skill == "OpenDrawer")
-    old = d._reps
+    old, n0 = d._reps, len(d.real.outcomes)
     try:
         failed = d.step(s0, place, rng)
         assert "not_applicable" in failed.obs.summary
@@ -453,7 +453,11 @@ def test_an_action_that_failed_on_the_real_robot_is_refused_until_a_step_ends_ok
         done = d.step(failed.state, pick, rng)
         assert done.obs.key[1] == 1.0, done.obs.summary
         assert not d.real.refused and d.real.now == 2
+        d.step(done.state, ManipAction("Place", TABLE), rng)
+        assert d.report()["real"][-2] == "Pick ok"
+        assert d.report()["real"][-1].startswith("Place(table) ")  # told from a Place
     finally:
+        del d.real.outcomes[n0:], d.real.labels[n0:]
         d._reps = old
         d.real.world.restore(s0.sim)
         d.real.weighed = b""
@@ -465,8 +469,6 @@ def test_an_action_that_failed_on_the_real_robot_is_refused_until_a_step_ends_ok
 def test_the_object_picked_too_early_goes_back_onto_the_table(drawer_episode):
     """One hand: an object picked before the target is open would be a dead end.
     Place(table) puts it back where it was picked, empty-handed and not done."""
-    from strug_manip.domains.manipulation.actions import TABLE
-
     d, _, belief = drawer_episode
     rng = np.random.default_rng(0)
     back = ManipAction("Place", TABLE)

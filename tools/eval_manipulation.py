@@ -19,8 +19,9 @@ the median episode wall time. Per domain, the failures by cause, counted per epi
 (per solver in brackets):
 
 * ``dragged``: the episode ended at -10 (the cabinet more than 0.1 m from its start);
-* ``placed elsewhere``: a real ``Place`` ran ``ok`` and the episode earned nothing (the
-  object in another part, or resting outside the target);
+* ``placed elsewhere``: a real ``Place`` into a part ran ``ok`` and the episode earned
+  nothing (the object in another part, or resting outside the target); records written
+  before ``Place(table)`` was told apart count its ``ok`` here as well;
 * ``out of steps after <skill> <status>``: the last real skill that ran and how it ended
   (``not_applicable`` steps, which run nothing, are left out);
 * ``nothing ran``: no real skill ran at all.

@@ -143,7 +143,9 @@ class RealEpisode:
         point: the point of the cabinet front that names it, world (3,) [m].
         frames: the head-camera frames taken so far (the initial views, then one per
             step), for logs.
-        outcomes: the full robot's outcomes, one per step.
+        outcomes: the full robot's outcomes, one per step that ran a skill.
+        labels: per outcome, the skill as the report names it (``Place(table)`` for
+            the Place back onto the table, else the skill's name).
         weighed: the cabinet's joints (to the mm, as bytes) when the belief last
             weighed a cloud (``ManipObservation.news``); empty before the first.
         refused: the actions that failed on the full robot in a way that repeats
@@ -161,6 +163,7 @@ class RealEpisode:
     point: np.ndarray
     frames: list[CameraFrame]
     outcomes: list[Outcome]
+    labels: list[str] = field(default_factory=list)
     weighed: bytes = b""
     refused: set[tuple[ManipAction, int]] = field(default_factory=set)
     now: int = 0
@@ -564,12 +567,14 @@ class ManipulationPOMDP(GenerativePOMDP):
 
     def report(self) -> dict[str, Any]:
         """Where this episode's time went [s], the caches' hit rates, and what the real
-        robot's skills did (``real``: ``skill status`` per step that ran one)."""
+        robot's skills did (``real``: ``skill status`` per step that ran one, the skill
+        named as in :attr:`RealEpisode.labels`)."""
         w = self.worlds
         out: dict[str, Any] = {"time": self.timers.as_dict()}
         if self.real is not None:
             out["cabinet_seed"] = self.real.seed
-            out["real"] = [f"{o.skill} {o.status}" for o in self.real.outcomes]
+            out["real"] = [f"{k} {o.status}" for k, o in zip(self.real.labels,
+                           self.real.outcomes, strict=True)]  # fmt: skip
         if w is not None:
             out["time"].update({k: v for k, v in w.timers.as_dict().items() if v})
             out["outcome_cache"] = {"hits": w.outcomes.hits, "misses": w.outcomes.misses,
@@ -795,6 +800,9 @@ class ManipulationPOMDP(GenerativePOMDP):
                 f"{a.skill}: {NOT_APPLICABLE} under the likeliest model"  # fmt: skip
         else:
             real.outcomes.append(out)
+            real.labels.append(
+                "Place(table)" if a.skill == "Place" and a.part == TABLE else a.skill
+            )
             status, holding, summary = out.status, out.holding, out.summary()
             motion = self._handle(REAL, a, world) - before
             reward = self._reward(world.scene.cabinet_spec, real.target, world, out)
