@@ -77,8 +77,9 @@ def report(records: list[dict]) -> str:
         failed = [r for r in rs if not r["success"]]
         causes = collections.Counter(cause(r) for r in failed)
         lines.append(f"\n{d}: failures by cause ({sum(causes.values())} of {len(rs)} episodes)")
+        by = collections.Counter((cause(r), r["solver"]) for r in failed)
         for c, n in causes.most_common():
-            who = collections.Counter(r["solver"] for r in failed if cause(r) == c)
+            who = {s: k for (c2, s), k in by.items() if c2 == c}
             lines.append(f"  {n:4d}  {c} ({', '.join(f'{s} {k}' for s, k in sorted(who.items()))})")
         total = {k: sum(r["report"]["time"].get(k, 0.0) for r in rs) for k in TIME_PARTS}
         t = sum(total.values()) or 1.0

@@ -173,8 +173,14 @@ def describe(a: ManipAction, parts: Sequence[CataloguePart]) -> str:
     if a.skill == "Pick":
         return f"Pick({a.grasp})"
     if a.skill == "Place" and a.part == TABLE:
-        return "Place(table)"
+        return label(a)
     name = parts[a.part].describe() if 0 <= a.part < len(parts) else f"part {a.part}"
     if a.hypothesis >= 0:
         return f"{a.skill}({name} as {parts[a.part].hypotheses[a.hypothesis]})"
     return f"{a.skill}({name})"
+
+
+def label(a: ManipAction) -> str:
+    """The skill of ``a`` as reports name it: ``Place(table)`` for the Place back onto
+    the table, else the skill's name."""
+    return "Place(table)" if a.skill == "Place" and a.part == TABLE else a.skill

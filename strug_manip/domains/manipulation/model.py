@@ -74,6 +74,7 @@ from strug_manip.domains.manipulation.actions import (
     action_list,
     catalogue,
     describe,
+    label,
     part_kind,
     part_point,
 )
@@ -144,8 +145,8 @@ class RealEpisode:
         frames: the head-camera frames taken so far (the initial views, then one per
             step), for logs.
         outcomes: the full robot's outcomes, one per step that ran a skill.
-        labels: per outcome, the skill as the report names it (``Place(table)`` for
-            the Place back onto the table, else the skill's name).
+        labels: per outcome, the skill as the report names it (:func:`.actions.label`:
+            ``Place(table)`` for the Place back onto the table, else the skill).
         weighed: the cabinet's joints (to the mm, as bytes) when the belief last
             weighed a cloud (``ManipObservation.news``); empty before the first.
         refused: the actions that failed on the full robot in a way that repeats
@@ -458,13 +459,12 @@ class ManipulationPOMDP(GenerativePOMDP):
         """
         if s.origin == REAL:
             return True
-        real = self.real
-        refused = real.refused if real is not None and s.t == real.now else ()
-        if refused and (self._check_action(a), self._rep(a)) in refused:
+        a, real = self._check_action(a), self.real
+        rep = self._rep(a)
+        if real is not None and s.t == real.now and (a, rep) in real.refused:
             return False
         w = self._need_worlds()
-        a = self._check_action(a)
-        key = (s.origin, s.sim.key, a, self._rep(a))
+        key = (s.origin, s.sim.key, a, rep)
         hit = w.outcomes.get(key)  # a peek: the search's hit rate counts steps only
         if hit is not None:
             return hit[1][0] != STATUS_CODES[NOT_APPLICABLE]
@@ -593,6 +593,7 @@ class ManipulationPOMDP(GenerativePOMDP):
     # --- set-up --------------------------------------------------------------------------
     def _make_space(self, actions: tuple[ManipAction, ...]) -> ActionSpace:
         parts = self.parts
+        self._known = frozenset(actions)  # _check_action's O(1) membership (a hot path)
         return ActionSpace(
             schemas=tuple(ActionSchema(s) for s in SKILLS),
             discretized=actions,
@@ -800,9 +801,7 @@ class ManipulationPOMDP(GenerativePOMDP):
                 f"{a.skill}: {NOT_APPLICABLE} under the likeliest model"  # fmt: skip
         else:
             real.outcomes.append(out)
-            real.labels.append(
-                "Place(table)" if a.skill == "Place" and a.part == TABLE else a.skill
-            )
+            real.labels.append(label(a))
             status, holding, summary = out.status, out.holding, out.summary()
             motion = self._handle(REAL, a, world) - before
             reward = self._reward(world.scene.cabinet_spec, real.target, world, out)
@@ -889,7 +888,7 @@ class ManipulationPOMDP(GenerativePOMDP):
         return open_enough(w.particles[s.origin].spec, link, q, T_now)
 
     def _check_action(self, a: Hashable) -> ManipAction:
-        if not isinstance(a, ManipAction) or a not in self._space.discretized:
+        if not isinstance(a, ManipAction) or a not in self._known:
             raise UnknownNameError(
                 "action", str(a), [self._space.name(x) for x in self._space.discretized]
             )
