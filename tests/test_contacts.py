@@ -107,3 +107,67 @@ def test_bad_names_and_joints_raise(world, checker) -> None:
         checker.set({"joint_9": 0.1})
     with pytest.raises(ConfigError, match=r"free joint.*cabinet/link_1"):
         checker.attach("cabinet/link_1", np.eye(4))
+
+
+def _reference_pairs(world, q: np.ndarray, attached: tuple[str, np.ndarray] | None) -> set:
+    """The forbidden robot contacts at ``q`` computed on the whole model, the scene's
+    contacts among themselves included (self-contacts on): what the checker must
+    report without computing the scene's own contacts."""
+    import copy
+
+    import mujoco
+
+    m = copy.copy(world.model)
+    c = ContactChecker(world.model, (*BASE_JOINTS, *ARM_TORSO_JOINTS))
+    robot_geoms = c.robot[np.asarray(m.geom_bodyid)] & (np.asarray(m.geom_contype) != 0)
+    m.geom_conaffinity[robot_geoms] |= m.geom_contype[robot_geoms]
+    d = mujoco.MjData(m)
+    d.qpos[:] = world.data.qpos
+    d.qpos[c.qadr] = q
+    mujoco.mj_kinematics(m, d)
+    counts = c.robot.copy()
+    allowed = set()
+    if attached is not None:
+        bid = c.body_id(attached[0])
+        adr = int(m.jnt_qposadr[m.body_jntadr[bid]])
+        site = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, "gripper")
+        T = np.eye(4)
+        T[:3, :3], T[:3, 3] = d.site_xmat[site].reshape(3, 3), d.site_xpos[site]
+        T = T @ attached[1]
+        d.qpos[adr : adr + 3] = T[:3, 3]
+        mujoco.mju_mat2Quat(d.qpos[adr + 3 : adr + 7], T[:3, :3].reshape(9).copy())
+        mujoco.mj_kinematics(m, d)
+        counts[bid] = True
+        allowed = {frozenset((bid, int(h))) for h in c.hand}
+    mujoco.mj_collision(m, d)
+    out = set()
+    for k in range(d.ncon):
+        a, b = (int(m.geom_bodyid[g]) for g in d.contact.geom[k])
+        if (counts[a] or counts[b]) and frozenset((a, b)) not in allowed:
+            out.add(frozenset((a, b)))
+    return out
+
+
+def test_leaving_out_the_scenes_own_contacts_changes_no_answer(world, checker, ik) -> None:
+    """On random arm configurations before the open top drawer (many touching the
+    cabinet or the robot itself), free or held: the checker reports exactly the
+    forbidden pairs the whole model's contacts give."""
+    world.reset({"joint_1": 0.2})
+    checker.load(world.data)
+    rng = np.random.default_rng(0)
+    lo = np.array([0.0, -1.6, -1.2, -3.1, -2.2, -3.1, -2.1, -3.1])
+    hi = np.array([0.38, 1.6, 1.5, 3.1, 2.2, 3.1, 2.1, 3.1])
+    T_go = np.eye(4)
+    T_go[0, 3] = 0.12
+    seen_hits = 0
+    for attached in (None, ("object", T_go)):
+        checker.attach(*attached) if attached else checker.attach(None)
+        checker.allow()
+        for _ in range(60):
+            q = np.concatenate([[0.25, 0.0, 0.0], rng.uniform(lo, hi)])
+            got = {frozenset(p) for p in checker.pairs(q).tolist()}
+            assert got == _reference_pairs(world, q, attached), q
+            seen_hits += bool(got)
+    assert 20 < seen_hits < 110  # both answers were asked for
+    checker.attach(None)
+    world.reset()

@@ -7,9 +7,14 @@ the Cartesian lines of every skill and the base placement search (:mod:`.placeme
 all use it.
 
 - *Robot bodies* are the subtree of the robot's root body; a contact counts if one of
-  its two bodies is a robot body and the pair is not allowed. Self-contacts count too:
-  where the simulation leaves them out (the scene's ``ROBOT_CONTYPE``), the checker
-  works on a copy of the model with them on.
+  its two bodies is a robot body and the pair is not allowed. Self-contacts count too,
+  though the simulation leaves them out (the scene's ``ROBOT_CONTYPE``).
+- The checker works on a copy of the model whose collision bits (:data:`ENV_BIT`,
+  :data:`ROBOT_BIT`) keep exactly the pairs that can count: robot with robot, and
+  robot with every geom of the scene that collides with the robot in the simulation.
+  The scene's own contacts (a cabinet on the floor, drawers in their carcass, the
+  object on the table: about a dozen per check, none of which can count) are never
+  computed: the narrow phase of ``mj_collision`` sees only what the robot touches.
 - *Allowed pairs* are body ids, e.g. the fingers with the handle they are about to grasp
   (:meth:`ContactChecker.allow`).
 - An *attached* body (a held object) follows the gripper: before each check its free
@@ -34,6 +39,10 @@ from strug_manip.robot.fetch import GRIPPER_SITE
 
 #: Largest joint step between two checks along a joint-space segment [rad or m].
 CHECK_STEP = 0.04
+#: Collision bits of the checker's model copy: the scene's geoms have contype ENV_BIT
+#: and conaffinity 0 (no contact among themselves), the robot's (and an attached
+#: body's) contype ROBOT_BIT and conaffinity ENV_BIT | ROBOT_BIT.
+ENV_BIT, ROBOT_BIT = 1, 2
 #: Bodies of the Fetch's hand: they may touch what they grasp.
 HAND_BODIES: tuple[str, ...] = ("gripper_link", "r_gripper_finger_link", "l_gripper_finger_link")
 
@@ -78,17 +87,15 @@ class ContactChecker:
             else self.body_id(robot_root)
         )
         self.robot = np.array([b != 0 and int(m.body_rootid[b]) == root for b in range(m.nbody)])
-        robot_geoms = self.robot[np.asarray(m.geom_bodyid)] & (np.asarray(m.geom_contype) != 0)
-        if np.any((m.geom_conaffinity & m.geom_contype)[robot_geoms] == 0):
-            # The simulation leaves the robot's self-contacts out (world.scene's
-            # ROBOT_CONTYPE); the checks need them: a copy of the model with them on.
-            m = self.model = copy.copy(model)
-            m.geom_conaffinity[robot_geoms] |= m.geom_contype[robot_geoms]
+        self.model = m = copy.copy(model)  # its collision bits become the checker's own
         self.geom_body = np.asarray(m.geom_bodyid).copy()
+        self._env_bits = _checker_bits(m, self.robot[self.geom_body])
         self.hand = np.array([self.body_id(b) for b in HAND_BODIES])
         self.data = mujoco.MjData(m)
         self._site = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, GRIPPER_SITE)
         self._allowed = np.zeros((m.nbody, m.nbody), dtype=bool)
+        # Bodies whose contacts count: the robot's, and an attached body.
+        self._counts = self.robot.copy()
         self._attached: tuple[int, int, np.ndarray] | None = None  # body, qpos adr, T_g_b
 
     def body_id(self, name: str) -> int:
@@ -159,16 +166,32 @@ class ContactChecker:
         """Make ``body`` (a free body, e.g. the held object) follow the gripper at
         ``T_gripper_body`` (4, 4); ``None`` detaches."""
         if body is None:
-            self._attached = None
+            self._detach()
             return
         m = self.model
         bid = self.body_id(body)
         jnt = int(m.body_jntadr[bid])
         if jnt < 0 or int(m.jnt_type[jnt]) != int(mujoco.mjtJoint.mjJNT_FREE):
             raise ConfigError(f"only a body on a free joint can be attached, got {body!r}")
+        self._detach()
         self._attached = (bid, int(m.jnt_qposadr[jnt]), np.asarray(T_gripper_body, float))
         for h in self.hand:
             self._allowed[bid, h] = self._allowed[h, bid] = True
+        # Held, it collides as the robot does: with the scene and with the robot.
+        geoms = (self.geom_body == bid) & (self._env_bits[:, 0] != 0)
+        m.geom_contype[geoms] = ROBOT_BIT
+        m.geom_conaffinity[geoms] = ENV_BIT | ROBOT_BIT
+        self._counts[bid] = True
+
+    def _detach(self) -> None:
+        if self._attached is None:
+            return
+        bid = self._attached[0]
+        geoms = self.geom_body == bid
+        self.model.geom_contype[geoms] = self._env_bits[geoms, 0]
+        self.model.geom_conaffinity[geoms] = self._env_bits[geoms, 1]
+        self._counts[bid] = self.robot[bid]
+        self._attached = None
 
     @property
     def attached_body(self) -> int:
@@ -189,21 +212,28 @@ class ContactChecker:
         d.qpos[adr + 3 : adr + 7] = quat
         mujoco.mj_kinematics(m, d)
 
-    def pairs(self, q: np.ndarray) -> np.ndarray:
-        """Forbidden contacts at ``q`` (values of :attr:`joints`): (k, 2) body ids."""
+    def _collide(self, q: np.ndarray) -> int:
+        """Pose the scratch data at ``q`` and find its contacts; their number."""
         m, d = self.model, self.data
         d.qpos[self.qadr] = q
         mujoco.mj_kinematics(m, d)
         if self._attached is not None:
             self._place_attached()
         mujoco.mj_collision(m, d)
-        if d.ncon == 0:
+        return d.ncon
+
+    def pairs(self, q: np.ndarray) -> np.ndarray:
+        """Forbidden contacts at ``q`` (values of :attr:`joints`): (k, 2) body ids."""
+        if self._collide(q) == 0:
             return np.zeros((0, 2), dtype=int)
-        bodies = self.geom_body[d.contact.geom]
-        robot = self.robot[bodies].any(axis=1)
-        if self._attached is not None:
-            robot |= (bodies == self._attached[0]).any(axis=1)
-        bad = robot & ~self._allowed[bodies[:, 0], bodies[:, 1]]
+        return self._forbidden()
+
+    def _forbidden(self) -> np.ndarray:
+        bodies = self.geom_body[self.data.contact.geom]
+        a, b = bodies[:, 0], bodies[:, 1]
+        # (The model's bits leave out the scene's contacts among themselves, except
+        # an explicit <pair>: the robot test stays.)
+        bad = (self._counts[a] | self._counts[b]) & ~self._allowed[a, b]
         return bodies[bad]
 
     def contacts(self, q: np.ndarray) -> list[str]:
@@ -213,7 +243,7 @@ class ContactChecker:
 
     def free(self, q: np.ndarray) -> bool:
         """No forbidden contact at ``q``."""
-        return len(self.pairs(q)) == 0
+        return self._collide(q) == 0 or len(self._forbidden()) == 0
 
     def segment(self, qa: np.ndarray, qb: np.ndarray) -> list[str]:
         """Forbidden contacts anywhere on the straight joint-space segment ``qa -> qb``
@@ -234,3 +264,24 @@ class ContactChecker:
             if hits:
                 return hits
         return []
+
+
+def _checker_bits(m: mujoco.MjModel, robot_geom: np.ndarray) -> np.ndarray:
+    """Set the checker's collision bits in ``m`` (:data:`ENV_BIT`, :data:`ROBOT_BIT`)
+    and return the scene geoms' bits, (ngeom, 2) (contype, conaffinity; zeros for the
+    robot's), to restore a body when it is detached.
+
+    A scene geom keeps colliding if the simulation lets it touch one of the robot's
+    geoms; a robot geom if it collides with anything; the rest collide with nothing.
+    ``robot_geom`` (ngeom,) marks the robot's geoms.
+    """
+    ct, ca = np.asarray(m.geom_contype).copy(), np.asarray(m.geom_conaffinity).copy()
+    r_ct = np.bitwise_or.reduce(ct[robot_geom]) if robot_geom.any() else 0
+    r_ca = np.bitwise_or.reduce(ca[robot_geom]) if robot_geom.any() else 0
+    touches_robot = ~robot_geom & (((ct & r_ca) != 0) | ((ca & r_ct) != 0))
+    robot = robot_geom & ((ct != 0) | (ca != 0))
+    env = np.zeros((m.ngeom, 2), dtype=ct.dtype)
+    env[touches_robot] = (ENV_BIT, 0)
+    m.geom_contype[:] = np.where(robot, ROBOT_BIT, env[:, 0])
+    m.geom_conaffinity[:] = np.where(robot, ENV_BIT | ROBOT_BIT, env[:, 1])
+    return env

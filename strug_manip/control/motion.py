@@ -311,9 +311,9 @@ class ArmMotionPlanner:
             ss = og.SimpleSetup(space)
             lo, hi = self.lower, self.upper
 
-            def is_valid(state) -> bool:
+            def is_valid(state) -> bool:  # OMPL's hot loop: ndarray methods, no wrappers
                 x = np.array(state[0:n])
-                if np.any(x < lo) or np.any(x > hi):
+                if (x < lo).any() or (x > hi).any():
                     return False
                 return validity.free(x)
 
