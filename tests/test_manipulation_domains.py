@@ -13,8 +13,8 @@ from planners.errors import ConfigError, UnknownNameError
 from planners.solvers import SOLVERS, make_solver
 from strug_manip.domains import MANIPULATION_DOMAINS, make_domain
 from strug_manip.domains.manipulation.actions import TABLE, ManipAction, part_kind
-from strug_manip.domains.manipulation.model import REPEATS_ITSELF
-from strug_manip.domains.manipulation.state import ManipObservation
+from strug_manip.domains.manipulation.model import BEFORE_MOTION, REPEATS_ITSELF
+from strug_manip.domains.manipulation.state import ManipObservation, observation_key
 from strug_manip.experiments.episode import run_episode
 from strug_manip.objects.hypotheses import BelievedJoint, model_of
 
@@ -332,7 +332,8 @@ def test_a_believed_flap_has_a_friction_stay_and_stays_shut():
 def test_a_cloud_of_an_unchanged_cabinet_is_weighed_once(drawer_episode):
     """The first real cloud is news; after a step that moved nothing (a Pick with the
     object in hand is not applicable) the cloud shows the same cabinet and the belief
-    update weighs only the outcome key, not the same misfit again."""
+    update does not weigh the same misfit again (nor the key: the step stopped before
+    anything moved)."""
     d, s0, belief = drawer_episode
     rng = np.random.default_rng(0)
     pick = ManipAction("Pick", grasp="top")
@@ -343,9 +344,8 @@ def test_a_cloud_of_an_unchanged_cabinet_is_weighed_once(drawer_episode):
         assert first.obs.news and not again.obs.news
         assert "not_applicable" in again.obs.summary
         nxt = [d.step(s, pick, rng).state for s in belief.states[:4]]
-        keys_only = ManipObservation(again.obs.key, None, "")
-        np.testing.assert_array_equal(d.obs_loglik_many(again.obs, nxt, pick),
-                                      d.obs_loglik_many(keys_only, nxt, pick))  # fmt: skip
+        keys_only = ManipObservation(first.obs.key, None, "")
+        np.testing.assert_array_equal(d.obs_loglik_many(again.obs, nxt, pick), np.zeros(4))
         assert not np.allclose(d.obs_loglik_many(first.obs, nxt, pick),
                                d.obs_loglik_many(keys_only, nxt, pick))  # fmt: skip
     finally:
@@ -463,6 +463,39 @@ def test_an_action_that_failed_on_the_real_robot_is_refused_until_a_step_ends_ok
         d.real.weighed = b""
         d.real.refused.clear()
         d.real.now = 0
+        d.condition(belief)
+
+
+def test_a_real_step_that_stopped_before_anything_moved_is_no_evidence(drawer_episode):
+    """The full robot finds its IK, route and arm motions before it moves, in the model
+    it plans against: a stop then (no motion plan in time, no IK) weighs nothing in
+    the real belief, and every particle stays as it was, its twin's opening undone."""
+    assert {"no_motion_plan", "ik_infeasible"} <= set(BEFORE_MOTION)
+    d, _, belief = drawer_episode
+    d.condition(belief)
+    rng = np.random.default_rng(0)
+    opening = next(a for a in d.action_space().discretized if a.skill == "OpenDrawer")
+    stepped = [d.step(s, opening, rng).state for s in belief.states]
+
+    def joints(s):
+        tw = d.worlds.twins[s.origin]
+        tw.restore(s.sim)
+        return np.array(list(tw.world.part_positions().values()))
+
+    opened = [not np.allclose(joints(a), joints(b), atol=1e-3)
+              for a, b in zip(belief.states, stepped, strict=True)]  # fmt: skip
+    assert 0 < sum(opened) < len(opened), opened  # the twins disagree
+    cloud = np.zeros((4, 3))  # a real observation; the cabinet unchanged (news False)
+    for status, evidence in (("no_motion_plan", False), ("ik_infeasible", False), ("ok", True)):
+        obs = ManipObservation(observation_key(status, False, np.zeros(3)), cloud, "", False)
+        assert (np.ptp(d.obs_loglik_many(obs, stepped, opening)) > 0) == evidence, status
+    try:
+        d.real.still, d.real.now = True, 1
+        post = d.condition(ParticleBelief(stepped, belief.weights, belief.origin))
+        for before, after in zip(belief.states, post.states, strict=True):
+            assert after.t == 1 and np.allclose(joints(before), joints(after), atol=1e-6)
+    finally:
+        d.real.still, d.real.now = False, 0
         d.condition(belief)
 
 

@@ -116,6 +116,15 @@ CANNOT_START = (str(Status.IK_INFEASIBLE), NOT_APPLICABLE)
 #: cabinet (again, the slides add up to a drag). A ``collision`` or a missing motion
 #: plan is not among them: the next attempt plans a new path.
 REPEATS_ITSELF = (*CANNOT_START, str(Status.GRASP_LOST), str(Status.CABINET_MOVED))
+#: The outcomes the full robot reaches before anything moves: every IK solution, route
+#: and arm motion of a skill (the stow after it included) is found before it moves, in
+#: the model it plans against (:meth:`ManipulationPOMDP._likeliest`), not in the real
+#: cabinet. Such an outcome is a function of that model and of the planners' budgets
+#: alone, so the real belief weighs it as no evidence and keeps its states as they
+#: were: after a Place whose stow found no plan in time, the particles whose twins
+#: placed the object would otherwise lose to those without the target part (their
+#: twins could not start either), and an episode gave up on the right model.
+BEFORE_MOTION = (*CANNOT_START, str(Status.NO_MOTION_PLAN))
 #: ``Place(table)`` with a side grasp starts this much above the object's spot and comes
 #: down to it [m]: the object held level clears the table top (a top grasp comes down
 #: from above anyway).
@@ -156,6 +165,7 @@ class RealEpisode:
             refuses them at the root while that particle is still their
             representative.
         now: the step count of the states after the last real step (the root's).
+        still: the last real step stopped before anything moved (:data:`BEFORE_MOTION`).
     """
 
     world: ManipulationWorld
@@ -168,6 +178,7 @@ class RealEpisode:
     weighed: bytes = b""
     refused: set[tuple[ManipAction, int]] = field(default_factory=set)
     now: int = 0
+    still: bool = False
 
 
 class ManipulationPOMDP(GenerativePOMDP):
@@ -290,6 +301,7 @@ class ManipulationPOMDP(GenerativePOMDP):
         if real is None or w is None or all(s.t == 0 for s in belief.states):
             self._belief = belief
             return belief
+        belief = self._unmoved(belief)
         rw = real.world
         base = np.array([rw.robot_qpos()[j] for j in BASE_JOINTS])
         moved = rw.cabinet_pose() @ np.linalg.inv(rw.scene.T_world_cabinet)
@@ -312,6 +324,21 @@ class ManipulationPOMDP(GenerativePOMDP):
         self._belief = ParticleBelief(states, belief.weights, belief.origin)
         self._reps = self._representatives(self._belief)
         return self._belief
+
+    def _unmoved(self, belief: ParticleBelief) -> ParticleBelief:
+        """After a real step that stopped before anything moved (:data:`BEFORE_MOTION`),
+        ``belief`` with every particle back in its state before the step (its step
+        count advanced): a twin that went through moved what the real robot did not
+        touch. Particles correspond by position (the real belief is never resampled);
+        ``belief`` as it is otherwise."""
+        prior, real = self._belief, self.real
+        if real is None or not real.still or prior is None or len(prior) != len(belief):
+            return belief
+        if not np.array_equal(prior.origin, belief.origin):
+            return belief
+        states = [ManipState(p.origin, p.sim, s.t, s.last)
+                  for p, s in zip(prior.states, belief.states, strict=True)]  # fmt: skip
+        return ParticleBelief(states, belief.weights, belief.origin)
 
     def _representatives(self, belief: ParticleBelief) -> tuple[tuple[int, ...], ...]:
         """Per catalogued part and hypothesis, the particle whose grasp and joint the
@@ -504,7 +531,10 @@ class ManipulationPOMDP(GenerativePOMDP):
         """The key's likelihood per state, times (real observations) the cloud's."""
         a = self._check_action(a)
         w = self._need_worlds()
-        out = np.array([self._key_loglik(o.key, s, a) for s in states])
+        if o.cloud is not None and self._before_motion(o.key):  # real: no evidence
+            out = np.zeros(len(states))
+        else:
+            out = np.array([self._key_loglik(o.key, s, a) for s in states])
         if o.cloud is None or not o.news:
             return out
         t0 = time.perf_counter()
@@ -768,6 +798,11 @@ class ManipulationPOMDP(GenerativePOMDP):
         T_now = world.cabinet_pose()
         return 10.0 if inside(spec, target, q, T_now, world.object_pose()) else 0.0
 
+    @staticmethod
+    def _before_motion(key: tuple[float, ...]) -> bool:
+        """The observation key's status is one of :data:`BEFORE_MOTION`."""
+        return int(key[0]) in {STATUS_CODES[x] for x in BEFORE_MOTION}
+
     def _key_loglik(self, key: tuple[float, ...], s: ManipState, a: ManipAction) -> float:
         """How likely particle state ``s`` (after ``a``) makes an observation with
         ``key``: a mismatched status or grip costs :data:`MISMATCH` each; the handle's
@@ -812,6 +847,7 @@ class ManipulationPOMDP(GenerativePOMDP):
         elif status in REPEATS_ITSELF:
             real.refused.add((a, self._rep(a)))
         real.now = s.t + 1
+        real.still = status in BEFORE_MOTION
         frame = take_views(world, 1)[0]
         real.frames.append(frame)
         cloud = voxel_thin(cabinet_cloud(world, frame))
