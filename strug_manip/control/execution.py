@@ -21,7 +21,7 @@ MuJoCo physics stepping all along (:class:`~strug_manip.control.driver.JointDriv
 5. **stow**: back to the tuck (holding the object: to its carry posture), so the next
    skill may drive and the head camera sees the cabinet past the arm; planned with the
    rest before anything moves (:func:`plan_stow`: from where the last line ends, the
-   believed parts where the lines took them).
+   believed parts where the lines took them, back the way the hand came first).
 
 Collision checks and plans use ``plan_world`` (the believed cabinet; default the world
 itself), into which the robot's and the object's state is copied by joint name before
@@ -39,6 +39,7 @@ import mujoco
 import numpy as np
 
 from planners.errors import ConfigError
+from strug_manip.control.contacts import ContactChecker
 from strug_manip.control.context import ControlContext
 from strug_manip.control.driver import JointDriver
 from strug_manip.control.grasps import held_grasp
@@ -110,12 +111,78 @@ def plan_stow(
     drive posture (the tuck, or holding the object its carry posture), planned in
     ``plan_world`` with the base where that line ends, every believed part moved where
     the plan's lines took it and a held object attached as grasped; () for no motion.
-    The full robot plans it before it moves; the planning twin plans the same one and
-    its hand follows it out of the cabinet's way.
+    The full robot plans it before it moves; the planning twin follows its first part,
+    :func:`stow_retreat`, out of the cabinet's way.
+
+    First back to the pre-grasp configuration (:func:`stow_retreat`, where that
+    straight line is free: the hand goes back the way it came) and from there: an arm
+    in an open drawer or over one is a narrow passage for the samplers, which spent
+    seconds on it (RRTConnect's budget, then LBKPIECE1's). Failing that, from where
+    the lines end.
 
     Raises:
         SkillStop: ``no_motion_plan``.
     """
+    setup = _stow_setup(ctx, plan_world, placement)
+    checker, base, q_end, goal = setup
+    if np.max(np.abs(q_end[1:] - goal[1:])) < TUCKED_TOLERANCE:
+        return np.zeros((0, len(goal)))
+    validity = ArmValidity(checker, base)
+    back = _retreat(setup, placement)
+    starts = [] if back is None else [back]
+    starts.append(np.zeros((0, len(goal))))
+    res = None
+    for prefix in starts:
+        start = prefix[-1] if len(prefix) else q_end
+        planners = ctx.planners(plan_world.model)
+        for i, planner in enumerate(planners):
+            res = planner.plan(
+                dict(zip(ARM_TORSO_JOINTS, start.tolist(), strict=True)),
+                dict(zip(ARM_TORSO_JOINTS, goal.tolist(), strict=True)),
+                validity,
+                timeout=params.planner_timeout(i, len(planners)),
+                seed=seed,
+            )
+            if res.success or res.reason != NO_PLAN:
+                break
+        if res.success:
+            return np.vstack([prefix, np.asarray(res.waypoints[1:])])
+    assert res is not None
+    raise SkillStop(Status.NO_MOTION_PLAN, f"{res.reason}: {res.detail}", "stow")
+
+
+def stow_retreat(
+    ctx: ControlContext, plan_world: ManipulationWorld, placement: Placement
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """The stow's first waypoint (1, 8), the pre-grasp configuration, when the straight
+    joint-space line to it from where the lines end is free in ``plan_world`` (set up
+    as :func:`plan_stow` does), and the drive posture the stow ends in (8,); None when
+    the line is not free, or when the arm needs no stow."""
+    setup = _stow_setup(ctx, plan_world, placement)
+    _, _, q_end, goal = setup
+    if np.max(np.abs(q_end[1:] - goal[1:])) < TUCKED_TOLERANCE:
+        return None
+    back = _retreat(setup, placement)
+    return None if back is None else (back, goal)
+
+
+_StowSetup = tuple[ContactChecker, np.ndarray, np.ndarray, np.ndarray]
+
+
+def _retreat(setup: _StowSetup, placement: Placement) -> np.ndarray | None:
+    checker, base, q_end, _ = setup
+    q_pre = placement.q_pre
+    if not np.any(q_pre != q_end) or checker.segment(np.r_[base, q_end], np.r_[base, q_pre]):
+        return None
+    return np.asarray(q_pre, dtype=float)[None]
+
+
+def _stow_setup(
+    ctx: ControlContext, plan_world: ManipulationWorld, placement: Placement
+) -> _StowSetup:
+    """The checker of ``plan_world`` as the stow after ``placement`` sees it (parts where
+    the lines took them, the object released or held), the base, where the lines end
+    and the drive posture: ``(checker, base (3,), q_end (8,), goal (8,))``."""
     plan = placement.plan
     base, q_end = placement.start_of(len(placement.lines))
     carrying = None
@@ -141,35 +208,7 @@ def plan_stow(
             checker.set({line.part_joint: float(line.part_q[-1])})
     checker.attach(*carrying) if carrying is not None else checker.attach(None)
     checker.allow()
-    if np.max(np.abs(q_end[1:] - goal[1:])) < TUCKED_TOLERANCE:
-        return np.zeros((0, len(goal)))
-    validity = ArmValidity(checker, base)
-    # From where the lines end; failing that (an arm deep in a low drawer is a narrow
-    # passage for the samplers), back to the pre-grasp configuration first (a straight
-    # joint-space line, if free: the hand goes back the way it came) and from there.
-    starts = [(q_end, np.zeros((0, len(goal))))]
-    q_pre = placement.q_pre
-    if np.any(q_pre != q_end):
-        starts.append((q_pre, q_pre[None]))
-    res = None
-    for start, prefix in starts:
-        if len(prefix) and checker.segment(np.r_[base, q_end], np.r_[base, start]):
-            continue
-        planners = ctx.planners(plan_world.model)
-        for i, planner in enumerate(planners):
-            res = planner.plan(
-                dict(zip(ARM_TORSO_JOINTS, start.tolist(), strict=True)),
-                dict(zip(ARM_TORSO_JOINTS, goal.tolist(), strict=True)),
-                validity,
-                timeout=params.planner_timeout(i, len(planners)),
-                seed=seed,
-            )
-            if res.success or res.reason != NO_PLAN:
-                break
-        if res.success:
-            return np.vstack([prefix, np.asarray(res.waypoints[1:])])
-    assert res is not None
-    raise SkillStop(Status.NO_MOTION_PLAN, f"{res.reason}: {res.detail}", "stow")
+    return checker, base, q_end, goal
 
 
 def recovery_poses(T_world_gripper: np.ndarray, params: SkillParams) -> tuple[np.ndarray, float]:

@@ -33,8 +33,9 @@ the same :class:`~strug_manip.control.outcome.Outcome`:
    and the same facts measured at the end; after the last release the arm's links
    (mocap bodies) follow the arm's joint path too, so a forearm backing out of a
    drawer sweeps what the full robot's would; then hand and arm follow the full
-   robot's stow (the same plan, :func:`~strug_manip.control.
-   execution.plan_stow`) until they are clear of the cabinet, leave the scene, and the
+   robot's stow (its straight way back to the pre-grasp, :func:`~strug_manip.control.
+   execution.stow_retreat`, where that is free, else the same plan, :func:`~strug_manip.
+   control.execution.plan_stow`) until they are clear of the cabinet, leave the scene, and the
    cabinet and the object settle for :data:`COAST_TIME`, and on while the cabinet still
    moves (:data:`REST_SPEED`), up to the rest of the stow's duration (a drawer of a
    dragged, tilted cabinet creeps on while the full robot stows); everything after the
@@ -67,7 +68,13 @@ from strug_manip.control import timing
 from strug_manip.control.base_servo import BaseServo, base_inertia
 from strug_manip.control.contacts import HAND_BODIES
 from strug_manip.control.context import ControlContext
-from strug_manip.control.execution import STOW_SEED, ends_holding, plan_stow, recovery_poses
+from strug_manip.control.execution import (
+    STOW_SEED,
+    ends_holding,
+    plan_stow,
+    recovery_poses,
+    stow_retreat,
+)
 from strug_manip.control.grasps import held_grasp
 from strug_manip.control.outcome import Outcome, SkillStop, Status
 from strug_manip.control.params import DEFAULT_PARAMS, SkillParams
@@ -568,11 +575,12 @@ class PlanningTwin:
     def _stow_commands(
         self, placement: Placement, plan_world: ManipulationWorld | None
     ) -> Stow | None:
-        """The full robot's stow after ``placement`` (:func:`~strug_manip.control.
-        execution.plan_stow`, the same plan) as the twin follows it: up to where the hand
-        and the arm are clear of the cabinet for good (:data:`STOW_CLEARANCE`); None
-        without a planning world (a kinematic-only twin) or when the stow finds no plan
-        (the full robot would stop there, with the skill's motions done)."""
+        """The full robot's stow after ``placement`` as the twin follows it: its straight
+        way back to the pre-grasp where that is free (:func:`~strug_manip.control.
+        execution.stow_retreat`; the rest is collision-free in the model), else the same
+        plan (:func:`~strug_manip.control.execution.plan_stow`) up to where the hand and
+        the arm are clear of the cabinet for good (:data:`STOW_CLEARANCE`); None without
+        a planning world (a kinematic-only twin) or when the stow finds no plan."""
         pw = self._planning(plan_world)
         if pw is None:
             return None
@@ -580,17 +588,27 @@ class PlanningTwin:
                         lambda: self._stow_path(placement, pw))  # fmt: skip
 
     def _stow_path(self, placement: Placement, pw: ManipulationWorld) -> Stow | None:
-        def plan() -> np.ndarray | None:
+        def plan() -> tuple[np.ndarray, np.ndarray | None] | None:
+            # The full robot's stow starts back the way the hand came, where that line
+            # is free, and is collision-free in the model from there: the twin follows
+            # that line alone (the hand out of a drawer; the rest of the stow as long
+            # as the straight line to the drive posture) and does not search the rest,
+            # which took most of its time. A stow the full robot then finds no plan for
+            # stops it before it moves, which the belief weighs as no evidence.
+            back = stow_retreat(self.ctx, pw, placement)
+            if back is not None:
+                return back
             try:
-                return plan_stow(self.ctx, pw, placement, self.params, STOW_SEED)
+                return plan_stow(self.ctx, pw, placement, self.params, STOW_SEED), None
             except SkillStop:
                 return None
 
         # The plan depends on the planning world alone: every twin that runs this
         # placement there shares it (the particles of one hypothesis, mostly).
-        stow = self.ctx.derived(placement, ("stow", self._token(pw), self.params), plan)
-        if stow is None:
+        found = self.ctx.derived(placement, ("stow", self._token(pw), self.params), plan)
+        if found is None:
             return None
+        stow, goal = found
         dt = self.world.model.opt.timestep
         base, q_end = placement.start_of(len(placement.lines))
         if not len(stow):
@@ -599,6 +617,9 @@ class PlanningTwin:
         T = timing.duration(pts, self.vmax, 0.3)
         qs = timing.samples(pts, T, dt, self.vmax)
         tcp, arm = self._fk_along(np.hstack([np.repeat(base[None], len(qs), axis=0), qs]))
+        if goal is not None:  # the rest: as long as the straight line on to the goal
+            rest = timing.duration(timing.polyline(stow[-1], [goal]), self.vmax, 0.3)
+            return Stow(tcp[:, :3].copy(), tcp[:, 3:].copy(), arm, round(rest / dt))
         # The hand (its TCP) and the arm (its links' origins and the middles between
         # them) near the cabinet.
         mid = 0.5 * (arm[:, 1:, :3] + arm[:, :-1, :3])
