@@ -14,7 +14,13 @@ import pytest
 from strug_manip.control import OpenDrawer, SkillPlan, handle_grasps
 from strug_manip.control.driver import BASE_SPEED
 from strug_manip.control.outcome import SkillStop, Status
-from strug_manip.control.placement import CANDIDATES, MAX_CANDIDATES, Placement, find_placement
+from strug_manip.control.placement import (
+    CANDIDATES,
+    HAND_IN_COLLISION,
+    MAX_CANDIDATES,
+    Placement,
+    find_placement,
+)
 from strug_manip.control.plan import line_of, straight
 from strug_manip.objects.hypotheses import BelievedJoint
 from strug_manip.robot.fetch import ARM_TORSO_JOINTS, BASE_JOINTS, TUCK, speed_limits
@@ -95,6 +101,25 @@ def test_an_unreachable_pre_grasp_is_ik_infeasible(world, ctx) -> None:
     n = 2 * min(MAX_CANDIDATES, len(CANDIDATES))
     assert f"of {n} reaches" in stop.value.detail
     assert f"pre-grasp unreachable: {n}" in stop.value.detail
+
+
+def test_a_pre_grasp_with_the_hand_in_the_cabinet_is_tried_from_one_base(world, ctx) -> None:
+    """The hand inside the top drawer's front: its pose is the plan's from every base,
+    so after the first base (fingers either way) no other is tried."""
+    world.reset()
+    with pytest.raises(SkillStop) as stop:
+        search(ctx, world, SkillPlan("Reach", _at(1.05, 1.06), ()))
+    assert stop.value.status is Status.IK_INFEASIBLE
+    assert "of 2 reaches" in stop.value.detail, stop.value.detail
+    assert f"{HAND_IN_COLLISION}: 2" in stop.value.detail
+    # Unchecked (the twin's kinematic search) the same pre-grasp is reachable.
+    assert search(ctx, world, SkillPlan("Reach", _at(1.05, 1.06), ()), checked=False).lines == ()
+
+
+def _at(x: float, z: float) -> np.ndarray:
+    T = np.eye(4)
+    T[:3, 3] = (x, 0.0, z)
+    return T
 
 
 def test_an_unreachable_line_is_ik_infeasible(world, ctx) -> None:

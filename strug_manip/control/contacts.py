@@ -91,6 +91,14 @@ class ContactChecker:
         self.geom_body = np.asarray(m.geom_bodyid).copy()
         self._env_bits = _checker_bits(m, self.robot[self.geom_body])
         self.hand = np.array([self.body_id(b) for b in HAND_BODIES])
+        self._hand_rigid = np.zeros(m.nbody, dtype=bool)
+        self._hand_rigid[self.hand] = True
+        b = self.body_id(HAND_BODIES[0])  # up from the gripper to its first joint
+        while b > 0:
+            self._hand_rigid[b] = True
+            if m.body_jntnum[b] > 0:  # it turns about its own joint; its parent does not
+                break
+            b = int(m.body_parentid[b])
         self.data = mujoco.MjData(m)
         self._site = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, GRIPPER_SITE)
         self._allowed = np.zeros((m.nbody, m.nbody), dtype=bool)
@@ -235,6 +243,19 @@ class ContactChecker:
         # an explicit <pair>: the robot test stays.)
         bad = (self._counts[a] | self._counts[b]) & ~self._allowed[a, b]
         return bodies[bad]
+
+    def hand_in_scene(self, pairs: np.ndarray) -> bool:
+        """Some pair of ``pairs`` (k, 2) (:meth:`pairs`) is the hand against the scene:
+        a body that moves with the gripper whatever the arm's joints (the fingers, and
+        up the chain to the first jointed body, the wrist's roll link) or the attached
+        body. Such a contact depends on where the hand is, not on how the arm or the
+        base got it there."""
+        a, b = pairs[:, 0], pairs[:, 1]
+        hand = self._hand_rigid.copy()
+        if self._attached is not None:
+            hand[self._attached[0]] = True
+        scene = ~self._counts
+        return bool(np.any((hand[a] & scene[b]) | (hand[b] & scene[a])))
 
     def contacts(self, q: np.ndarray) -> list[str]:
         """Forbidden contacts at ``q`` as sorted ``body1/body2`` names ([] if none)."""
