@@ -125,7 +125,7 @@ def plan_stow(
     """
     setup = _stow_setup(ctx, plan_world, placement)
     checker, base, q_end, goal = setup
-    if np.max(np.abs(q_end[1:] - goal[1:])) < TUCKED_TOLERANCE:
+    if _stowed(q_end, goal):
         return np.zeros((0, len(goal)))
     validity = ArmValidity(checker, base)
     back = _retreat(setup, placement)
@@ -160,13 +160,18 @@ def stow_retreat(
     the line is not free, or when the arm needs no stow."""
     setup = _stow_setup(ctx, plan_world, placement)
     _, _, q_end, goal = setup
-    if np.max(np.abs(q_end[1:] - goal[1:])) < TUCKED_TOLERANCE:
+    if _stowed(q_end, goal):
         return None
     back = _retreat(setup, placement)
     return None if back is None else (back, goal)
 
 
 _StowSetup = tuple[ContactChecker, np.ndarray, np.ndarray, np.ndarray]
+
+
+def _stowed(q: np.ndarray, goal: np.ndarray) -> bool:
+    """The arm (torso aside) of ``q`` is within :data:`TUCKED_TOLERANCE` of ``goal``."""
+    return bool(np.max(np.abs(q[1:] - goal[1:])) < TUCKED_TOLERANCE)
 
 
 def _retreat(setup: _StowSetup, placement: Placement) -> np.ndarray | None:

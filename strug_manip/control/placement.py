@@ -290,11 +290,10 @@ def find_placement(
                 continue
             tried += 1
             why, found = _try(candidate, ik, wb_ik, base, postures, speeds, checker)
-            if why == HAND_IN_COLLISION:
-                reasons[why] = reasons.get(why, 0) + 1
-                break
             if found is None:
                 reasons[why] = reasons.get(why, 0) + 1
+                if why == HAND_IN_COLLISION:
+                    break
                 continue
             q_pre, lines, bases = found
             p = Placement(base, q_pre, lines, bases, tried, {}, 0.0, candidate,

@@ -125,6 +125,8 @@ REPEATS_ITSELF = (*CANNOT_START, str(Status.GRASP_LOST), str(Status.CABINET_MOVE
 #: placed the object would otherwise lose to those without the target part (their
 #: twins could not start either), and an episode gave up on the right model.
 BEFORE_MOTION = (*CANNOT_START, str(Status.NO_MOTION_PLAN))
+#: Their status codes, as observation keys carry them.
+BEFORE_MOTION_CODES = frozenset(STATUS_CODES[x] for x in BEFORE_MOTION)
 #: ``Place(table)`` with a side grasp starts this much above the object's spot and comes
 #: down to it [m]: the object held level clears the table top (a top grasp comes down
 #: from above anyway).
@@ -801,7 +803,7 @@ class ManipulationPOMDP(GenerativePOMDP):
     @staticmethod
     def _before_motion(key: tuple[float, ...]) -> bool:
         """The observation key's status is one of :data:`BEFORE_MOTION`."""
-        return int(key[0]) in {STATUS_CODES[x] for x in BEFORE_MOTION}
+        return int(key[0]) in BEFORE_MOTION_CODES
 
     def _key_loglik(self, key: tuple[float, ...], s: ManipState, a: ManipAction) -> float:
         """How likely particle state ``s`` (after ``a``) makes an observation with
