@@ -56,6 +56,7 @@ from strug_manip.control import (
     place_target,
     run_batch,
 )
+from strug_manip.control import twin as twin_mod
 from strug_manip.control.execution import TUCKED_TOLERANCE
 from strug_manip.control.outcome import SkillStop
 from strug_manip.control.placement import WHOLE_BODY_LINES
@@ -660,6 +661,45 @@ def test_the_twins_arm_poses_along_a_path_are_forward_kinematics_to_the_millimet
         assert np.max(np.linalg.norm(arm[i, :, :3] - pos, axis=1)) < 1e-3
         dots = np.abs(np.sum(arm[i, :, 3:] * quat, axis=1))
         assert np.all(2 * np.arccos(np.clip(dots, -1, 1)) < 2e-3)
+
+
+def test_the_twins_arm_never_enters_a_part_and_its_recovery_stops_a_sliding_cabinet(
+    worlds,
+) -> None:
+    """Two guards against a twin moving its cabinet as no full robot could. The arm's
+    links, simulated from the last release on, stay parked when they would appear more
+    than ``ARM_ENTRY_DEPTH`` inside a part (a mocap link pushed out of a door launched a
+    twin's cabinet at metres a second); and the recovery after a stop ends at the first
+    10 ms check where the cabinet has slid more than the limit since it began, as the
+    full robot's monitored recovery does."""
+    world = worlds["mixed_17"]
+    twin = PlanningTwin(world.scene.cabinet_spec, world.config, ControlContext())
+    twin.reset()
+    m, d = twin.world.model, twin.world.data
+    start = np.empty(mujoco.mj_stateSize(m, twin_mod._ROLLOUT_STATE))
+    mujoco.mj_getState(m, d, start, twin_mod._ROLLOUT_STATE)
+    row = np.empty(mujoco.mj_stateSize(m, twin_mod._CONTROL))
+    mujoco.mj_getState(m, d, row, twin_mod._CONTROL)
+    assert not twin._arm_starts_inside(start, row)  # parked: above everything
+    T = world.scene.T_world_cabinet
+    handle = world.scene.cabinet_spec.part("link_5").handle_at(0.0, T)
+    inside = row.copy()
+    mpos = inside[m.nu : m.nu + 3 * m.nmocap].reshape(m.nmocap, 3)
+    mpos[twin._arm_mocap] = handle - np.array([0.03, 0.0, 0.0])  # through the door panel
+    assert twin._arm_starts_inside(start, inside)
+    after = np.empty_like(start)
+    mujoco.mj_getState(m, d, after, twin_mod._ROLLOUT_STATE)
+    assert np.array_equal(after, start)  # the check leaves the twin as it was
+
+    n, limit = 200, twin.params.cabinet_motion_limit
+    states = np.repeat(start[None], n, axis=0)
+    a = 1 + twin._cabinet_xy
+    assert len(twin._until_slid(states, start)) == n  # a cabinet at rest: all of it
+    states[:, a] += np.linspace(0.0, 4 * limit, n)  # slides on at a steady speed
+    cut = twin._until_slid(states, start)
+    every = max(1, round(0.01 / m.opt.timestep))
+    first = int(np.flatnonzero(states[:, a] - start[a] > limit)[0])
+    assert len(cut) == math.ceil((first + 1) / every) * every  # the check at or after it
 
 
 # --- 5. determinism ---------------------------------------------------------------------

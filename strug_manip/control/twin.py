@@ -32,7 +32,9 @@ the same :class:`~strug_manip.control.outcome.Outcome`:
    ``cabinet_motion_limit``, the hand held back more than the tracking tolerance)
    and the same facts measured at the end; after the last release the arm's links
    (mocap bodies) follow the arm's joint path too, so a forearm backing out of a
-   drawer sweeps what the full robot's would; then hand and arm follow the full
+   drawer sweeps what the full robot's would (unless they would appear inside a part,
+   :data:`ARM_ENTRY_DEPTH`); after a stop, the full robot's recovery, which ends where
+   the cabinet slides; then hand and arm follow the full
    robot's stow (its straight way back to the pre-grasp, :func:`~strug_manip.control.
    execution.stow_retreat`, where that is free, else the same plan, :func:`~strug_manip.
    control.execution.plan_stow`) until they are clear of the cabinet, leave the scene, and the
@@ -115,6 +117,10 @@ TIMESTEP = 0.005
 #: Where they do touch (an arm link knocking an open door on the stow), the coarser
 #: step can knock harder (1 of 200 tuning runs changed; README).
 FREE_COARSENING = 2
+#: An arm link that enters the scene (after the last release) deeper than this in
+#: something [m] stays parked (:meth:`PlanningTwin._arm_starts_inside`): a link
+#: resting against a door is simulated, one inside a part is not.
+ARM_ENTRY_DEPTH = 0.005
 #: Forward kinematics along a joint path (the stow, the lines after the last release)
 #: runs every this many steps, the poses between interpolated [-]: the hand moves at
 #: most a few centimetres in that time, along an arc whose chord is then well under a
@@ -216,6 +222,7 @@ class PlanningTwin:
         self._base_mocap = int(m.body_mocapid[m.body("robot_base").id])
         self._arm_mocap = np.array([int(m.body_mocapid[m.body(b).id]) for b in ARM_LINKS])
         self._arm_fetch = [self.ctx.ik.model.body(b).id for b in ARM_LINKS]
+        self._arm_bodies = np.array([m.body(b).id for b in ARM_LINKS])
         self._obj_adr = int(m.jnt_qposadr[m.joint("object/free").id])
         self._fingers = [m.jnt_qposadr[m.joint(j).id] for j in GRIPPER_JOINTS]
         self.vmax = speed_limits(self.ctx.ik.model)
@@ -771,6 +778,8 @@ class PlanningTwin:
                 m.opt.timestep = dt * FREE_COARSENING
                 sl = slice(prog.free, None, FREE_COARSENING)
                 stop_prog, tail_ctrl = prog.steps(sl), ctrl[sl]
+                if self._arm_starts_inside(start, tail_ctrl[0]):
+                    tail_ctrl = self.park_arm(tail_ctrl)
                 st, _ = rollout.rollout(m, self.world.data, start[None], tail_ctrl[None],
                                         control_spec=_CONTROL)  # fmt: skip
                 j = self.judge(stop_prog, st[0])
@@ -784,14 +793,55 @@ class PlanningTwin:
                 extra = self.recovery(stop_prog, start)
                 rec, _ = rollout.rollout(m, self.world.data, start[None], extra[None],
                                          control_spec=_CONTROL)  # fmt: skip
-                parts.append(rec[0])
-                start, last = rec[0][-1], extra[-1:]
+                rec = self._until_slid(rec[0], start)
+                parts.append(rec)
+                start, last = rec[-1], extra[len(rec) - 1 : len(rec)]
             budget = prog.coast if final[1] is Status.OK else 0
             budget = round(budget * dt / m.opt.timestep)
             parts.append(self.coast(start, self.park_arm(last), budget))
         finally:
             m.opt.timestep = dt
         return np.concatenate(parts), final
+
+    def _arm_starts_inside(self, start: np.ndarray, row: np.ndarray) -> bool:
+        """Whether the arm's links, set where control ``row`` (nu + 7 nmocap) puts them
+        in rollout state ``start``, reach more than :data:`ARM_ENTRY_DEPTH` into
+        anything. The links are simulated only after the last release and enter the
+        scene there at once; a link inside this particle's cabinet (its parts are not
+        where the model the path was planned in has them) would be pushed out with an
+        impulse no arm exerts: such a twin's cabinet flew off at metres a second (a
+        0.9 m "drag" on a tuning door seed). The full robot's arm would have met that
+        part on the way, where the twin has no arm; the twin then keeps the arm parked
+        for the run, as before its release."""
+        m, d = self.world.model, self.world.data
+        saved = np.empty(mujoco.mj_stateSize(m, _SAVED))
+        mujoco.mj_getState(m, d, saved, _SAVED)
+        try:
+            mujoco.mj_setState(m, d, start, _ROLLOUT_STATE)
+            mujoco.mj_setState(m, d, row, _CONTROL)
+            mujoco.mj_fwdPosition(m, d)
+            con = d.contact[: d.ncon]
+            arm = np.isin(m.geom_bodyid[con.geom1], self._arm_bodies) | np.isin(
+                m.geom_bodyid[con.geom2], self._arm_bodies
+            )
+            return bool(np.any(arm & (con.dist < -ARM_ENTRY_DEPTH)))
+        finally:
+            mujoco.mj_setState(m, d, saved, _SAVED)
+
+    def _until_slid(self, states: np.ndarray, start: np.ndarray) -> np.ndarray:
+        """The recovery's rollout ``states`` (n, nstate) up to the first 10 ms check at
+        which the cabinet has slid more than ``cabinet_motion_limit`` since ``start``
+        (all of them if it never does). The full robot's recovery is monitored so
+        (:meth:`~strug_manip.control.execution.FullRobot._recover`): its arm stops
+        where it is. Unmonitored, a hand caught on a handle as it backed off dragged a
+        twin's cabinet on for the whole back-off (0.9 m on a tuning door seed), a drag
+        no full robot makes."""
+        m = self.world.model
+        a = 1 + self._cabinet_xy
+        slid = np.linalg.norm(states[:, a : a + 2] - start[a : a + 2], axis=1)
+        every = max(1, round(0.01 / m.opt.timestep))
+        over = np.flatnonzero(slid[every - 1 :: every] > self.params.cabinet_motion_limit)
+        return states if not len(over) else states[: (int(over[0]) + 1) * every]
 
     def finish(
         self,
@@ -1021,6 +1071,8 @@ def _collide(m: mujoco.MjModel, g: int) -> tuple[int, int]:
 
 #: What a rollout's states hold (MuJoCo's full physics: time, qpos, qvel, act, ...).
 _ROLLOUT_STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
+#: What a check on the side saves and puts back: the state and the controls.
+_SAVED = int(mujoco.mjtState.mjSTATE_INTEGRATION)
 #: What a rollout's controls set every step: the actuators' controls and the mocap
 #: bodies' poses (the believed robot base, the arm links).
 _CONTROL = int(
