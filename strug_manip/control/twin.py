@@ -833,9 +833,8 @@ class PlanningTwin:
         which the cabinet has slid more than ``cabinet_motion_limit`` since ``start``
         (all of them if it never does). The full robot's recovery is monitored so
         (:meth:`~strug_manip.control.execution.FullRobot._recover`): its arm stops
-        where it is. Unmonitored, a hand caught on a handle as it backed off dragged a
-        twin's cabinet on for the whole back-off (0.9 m on a tuning door seed), a drag
-        no full robot makes."""
+        where it is. Unmonitored, a hand caught on a handle as it backs off would drag
+        the twin's cabinet on for the whole back-off, a drag no full robot makes."""
         m = self.world.model
         a = 1 + self._cabinet_xy
         slid = np.linalg.norm(states[:, a : a + 2] - start[a : a + 2], axis=1)
