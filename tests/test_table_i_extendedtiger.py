@@ -5,8 +5,8 @@ find the chain of paid, uninformative listens, and STRUG beats POMCP and POMCPOW
 than two standard errors while staying within 2 points of the best solver. Episodes are
 deterministic given their seeds, so this is a regression check with fixed figures
 (README, "Table I"), not a statistical gamble. Marked ``slow`` (``make test-all``): the
-claim needs all 100 seeds (STRUG leads POMCPOW by 2.3 combined standard errors), and
-the column alone took a fifth of ``make test``'s 15 minutes.
+claim needs all 100 seeds, and 600 episodes are an evaluation's length, not a unit
+test's (the README has the figures).
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from strug_manip.experiments.bench import BenchSpec, run_bench
 SOLVERS = ("random", "pomcp", "pomcpow", "entropy", "active", "strug")
 
 
-@pytest.mark.slow  # 600 episodes at 3000 simulations: 3-4 minutes on 2 cores
+@pytest.mark.slow  # 600 episodes at 3000 simulations
 def test_extendedtiger_column(tmp_path: Path) -> None:
     spec = BenchSpec(("extendedtiger",), SOLVERS, 100)
     column = run_bench(spec, tmp_path, workers=2, progress=False)["extendedtiger"]

@@ -727,14 +727,13 @@ class PlanningTwin:
         checked every 10 ms as on the full robot) and why; the last step if none."""
         m = self.world.model
         qpos = states[:, 1 : 1 + m.nq]
-        xy = qpos[:, self._cabinet_xy : self._cabinet_xy + 2]
-        slid = np.linalg.norm(xy - self.cabinet_xy0, axis=1)
+        slid = self._slid(states, self.cabinet_xy0)
         fingers = 0.5 * (qpos[:, self._fingers[0]] + qpos[:, self._fingers[1]])
         tcp = qpos[:, self._slide_adr] + TCP_OFFSET * _x_axes(
             qpos[:, self._ball_adr : self._ball_adr + 4]
         )
         lag = np.linalg.norm(tcp - prog.pos, axis=1)
-        every = max(1, round(0.01 / m.opt.timestep))
+        every = self._check_every()
         check = np.zeros(len(lag), dtype=bool)
         check[every - 1 :: every] = True
         check[prog.phase_ends] = True
@@ -809,10 +808,10 @@ class PlanningTwin:
         anything. The links are simulated only after the last release and enter the
         scene there at once; a link inside this particle's cabinet (its parts are not
         where the model the path was planned in has them) would be pushed out with an
-        impulse no arm exerts: such a twin's cabinet flew off at metres a second (a
-        0.9 m "drag" on a tuning door seed). The full robot's arm would have met that
-        part on the way, where the twin has no arm; the twin then keeps the arm parked
-        for the run, as before its release."""
+        impulse no arm exerts, and the twin's cabinet would fly off (README, "The
+        planning twin"). The full robot's arm would have met that part on the way,
+        where the twin has no arm; the twin then keeps the arm parked for the run, as
+        before its release."""
         m, d = self.world.model, self.world.data
         saved = np.empty(mujoco.mj_stateSize(m, _SAVED))
         mujoco.mj_getState(m, d, saved, _SAVED)
@@ -829,18 +828,27 @@ class PlanningTwin:
             mujoco.mj_setState(m, d, saved, _SAVED)
 
     def _until_slid(self, states: np.ndarray, start: np.ndarray) -> np.ndarray:
-        """The recovery's rollout ``states`` (n, nstate) up to the first 10 ms check at
-        which the cabinet has slid more than ``cabinet_motion_limit`` since ``start``
-        (all of them if it never does). The full robot's recovery is monitored so
-        (:meth:`~strug_manip.control.execution.FullRobot._recover`): its arm stops
-        where it is. Unmonitored, a hand caught on a handle as it backs off would drag
-        the twin's cabinet on for the whole back-off, a drag no full robot makes."""
-        m = self.world.model
+        """The recovery's rollout ``states`` (n, nstate) up to the first check (as in
+        :meth:`judge`) at which the cabinet has slid more than ``cabinet_motion_limit``
+        since ``start`` (all of them if it never does). The full robot's recovery is
+        monitored so (:meth:`~strug_manip.control.execution.FullRobot._recover`): its
+        arm stops where it is. Unmonitored, a hand caught on a handle as it backs off
+        would drag the twin's cabinet on for the whole back-off, a drag no full robot
+        makes."""
         a = 1 + self._cabinet_xy
-        slid = np.linalg.norm(states[:, a : a + 2] - start[a : a + 2], axis=1)
-        every = max(1, round(0.01 / m.opt.timestep))
+        every = self._check_every()
+        slid = self._slid(states, start[a : a + 2])
         over = np.flatnonzero(slid[every - 1 :: every] > self.params.cabinet_motion_limit)
         return states if not len(over) else states[: (int(over[0]) + 1) * every]
+
+    def _slid(self, states: np.ndarray, xy0: np.ndarray) -> np.ndarray:
+        """How far the cabinet stands from ``xy0`` (2,) in each rollout state, (n,) [m]."""
+        a = 1 + self._cabinet_xy
+        return np.linalg.norm(states[:, a : a + 2] - xy0, axis=1)
+
+    def _check_every(self) -> int:
+        """Steps between the monitors' checks: every 10 ms, as on the full robot."""
+        return max(1, round(0.01 / self.world.model.opt.timestep))
 
     def finish(
         self,
