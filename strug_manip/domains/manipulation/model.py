@@ -118,7 +118,7 @@ CANNOT_START = (str(Status.IK_INFEASIBLE), NOT_APPLICABLE)
 REPEATS_ITSELF = (*CANNOT_START, str(Status.GRASP_LOST), str(Status.CABINET_MOVED))
 #: The outcomes the full robot reaches before anything moves: every IK solution, route
 #: and arm motion of a skill (the stow after it included) is found before it moves, in
-#: the model it plans against (:meth:`ManipulationPOMDP._likeliest`), not in the real
+#: the model it plans against (:meth:`ManipulationPOMDP._plan_models`), not in the real
 #: cabinet. Such an outcome is a function of that model and of the planners' budgets
 #: alone, so the real belief weighs it as no evidence and keeps its states as they
 #: were: after a Place whose stow found no plan in time, the particles whose twins
@@ -127,6 +127,14 @@ REPEATS_ITSELF = (*CANNOT_START, str(Status.GRASP_LOST), str(Status.CABINET_MOVE
 BEFORE_MOTION = (*CANNOT_START, str(Status.NO_MOTION_PLAN))
 #: Their status codes, as observation keys carry them.
 BEFORE_MOTION_CODES = frozenset(STATUS_CODES[x] for x in BEFORE_MOTION)
+#: The real robot plans an opening or a probe in at most this many models before it
+#: spends the step: the hypothesis's representative, then its next likeliest holders.
+#: A plan that stops before anything moves (:data:`BEFORE_MOTION`) costs a whole step
+#: and is no evidence, so the belief cannot steer away from it; another holder's model
+#: differs in where the handle, the hinge and the other parts are (a holder that
+#: believes a neighbouring door ajar finds the approach to the target blocked).
+#: Planning is cheap next to a step; three keeps a step's worst case a few seconds.
+REAL_PLAN_MODELS = 3
 #: ``Place(table)`` with a side grasp starts this much above the object's spot and comes
 #: down to it [m]: the object held level clears the table top (a top grasp comes down
 #: from above anyway).
@@ -355,19 +363,30 @@ class ManipulationPOMDP(GenerativePOMDP):
         tried next; and a belief that has settled on one particle opens the part along
         that particle's own joint. Within one search the representatives are fixed
         (they change after a real step), so every search sees one POMDP."""
+        mass = self._mass(belief)
+        out = []
+        for k, part in enumerate(self.parts):
+            row = []
+            for h in range(len(part.hypotheses)):
+                held = self._holders(mass, k, h)
+                row.append(held[0] if held and mass[held[0]] > 0 else self._reps[k][h])
+            out.append(tuple(row))
+        return tuple(out)
+
+    def _mass(self, belief: ParticleBelief) -> np.ndarray:
+        """Each model's (particle origin's) weight in ``belief``, (n_models,)."""
         mass = np.zeros(len(self._classes))
         for s, wt in zip(belief.states, belief.weights.tolist(), strict=True):
             if s.origin >= 0:
                 mass[s.origin] += wt
-        out = []
-        for k, part in enumerate(self.parts):
-            row = []
-            for h, kind in enumerate(part.hypotheses):
-                held = [i for i in range(len(mass)) if self._classes[i][k] == kind]
-                best = max(held, key=lambda i: (mass[i], -i), default=None)
-                row.append(best if best is not None and mass[best] > 0 else self._reps[k][h])
-            out.append(tuple(row))
-        return tuple(out)
+        return mass
+
+    def _holders(self, mass: np.ndarray, k: int, h: int) -> list[int]:
+        """The models that hold hypothesis ``h`` of catalogued part ``k``, likeliest
+        first (ties: the lowest index)."""
+        kind = self.parts[k].hypotheses[h]
+        held = [i for i in range(len(mass)) if self._classes[i][k] == kind]
+        return sorted(held, key=lambda i: (-mass[i], i))
 
     def _rep(self, a: ManipAction) -> int:
         """The particle whose grasp and joint opening or probe ``a`` follows (-1: Pick
@@ -725,10 +744,12 @@ class ManipulationPOMDP(GenerativePOMDP):
         return (tw.snapshot(), observation_key(out.status, out.holding, motion), reward,
                 reward != 0.0, out.summary())  # fmt: skip
 
-    def _skills(self, i: int, a: ManipAction, sim: WorldState):
+    def _skills(self, i: int, a: ManipAction, sim: WorldState, holder: int | None = None):
         """The skills to try in turn (each next grasp or placement while the previous is
         ``ik_infeasible``) and the planning world, for ``a`` on particle ``i`` in ``sim``
-        (on the real robot: ``i`` is the likeliest model, ``sim`` its state)."""
+        (on the real robot: ``i`` is the model it plans in, ``sim`` its state). An
+        opening or a probe follows ``holder``'s grasp and joint and plans in its
+        likeliest state (default: the hypothesis's representative, :meth:`_rep`)."""
         w = self._need_worlds()
         if a.skill == "Pick":
             # The object's table is far from the cabinet: one planning world serves
@@ -751,8 +772,7 @@ class ManipulationPOMDP(GenerativePOMDP):
             except ConfigError:
                 return [], None  # the part is not open enough: no pose to place at
             return [Place("object", t.p, t.lift) for t in tgts], None
-        h = max(a.hypothesis, 0)
-        holder = self._reps[a.part][h]
+        holder = self._rep(a) if holder is None else holder
         spec_part = w.particles[holder].spec.part(part.links[holder])
         q = w.particles[holder].q.get(spec_part.joint, 0.0)
         T = w.pose(holder)
@@ -822,16 +842,24 @@ class ManipulationPOMDP(GenerativePOMDP):
         t0 = time.perf_counter()
         world = real.world
         world.restore(s.sim)
-        i, state = self._likeliest(a, rng)
-        candidates, plan_world = self._skills(i, a, state)
-        if plan_world is None:
-            plan_world = self._need_worlds().fetch(i, state)
         before = self._handle(REAL, a, world)
         seed = int(rng.integers(2**31))
-        out = _first_feasible(
-            functools.partial(sk.run, world, ctx=self.ctx, plan_world=plan_world, seed=seed)
-            for sk in candidates
-        )
+        out, tried = None, 0
+        for i, state in self._plan_models(a, rng):
+            tried += 1
+            world.restore(s.sim)  # a stop before motion may still have stepped it
+            candidates, plan_world = self._skills(i, a, state, holder=i)
+            if plan_world is None or a.skill == "Pick":
+                # The model's state, not the search's shared one for Pick: the route
+                # from the cabinet to the table must keep clear of the doors that
+                # stand open (the arm swept an open door shut on the way).
+                plan_world = self._need_worlds().fetch(i, state)
+            out = _first_feasible(
+                functools.partial(sk.run, world, ctx=self.ctx, plan_world=plan_world, seed=seed)
+                for sk in candidates
+            )
+            if out is not None and out.status not in BEFORE_MOTION:
+                break
         if out is None:
             status, holding, motion, reward, summary = NOT_APPLICABLE, holds_object(world), \
                 np.zeros(3), 0.0, \
@@ -840,6 +868,8 @@ class ManipulationPOMDP(GenerativePOMDP):
             real.outcomes.append(out)
             real.labels.append(label(a))
             status, holding, summary = out.status, out.holding, out.summary()
+            if tried > 1:  # the belief weighs it as the representative's action
+                summary += f" [planned in model {i}, after {tried - 1} that could not start]"
             motion = self._handle(REAL, a, world) - before
             reward = self._reward(world.scene.cabinet_spec, real.target, world, out)
         # Such a failure repeats itself until something changes: the plan is made
@@ -860,18 +890,33 @@ class ManipulationPOMDP(GenerativePOMDP):
         done = reward != 0.0 or s.t + 1 >= self.max_steps
         return Step(ManipState(REAL, world.snapshot(), s.t + 1, obs.key), obs, reward, done)
 
+    def _plan_models(
+        self, a: ManipAction, rng: np.random.Generator
+    ) -> list[tuple[int, WorldState]]:
+        """The models the real robot plans ``a`` against, in the order it tries them
+        while a plan stops before anything moves, each with its state: for an opening
+        or a probe, the hypothesis's representative (:meth:`_representatives`) and
+        then its next likeliest holders with weight, at most :data:`REAL_PLAN_MODELS`,
+        each in its likeliest current state; for Pick and Place, one model
+        (:meth:`_likeliest`)."""
+        w = self._need_worlds()
+        if a.skill in ("Pick", "Place"):
+            return [self._likeliest(a, rng)]
+        rep = self._rep(a)
+        b = self._belief
+        mass = self._mass(b) if b is not None else np.zeros(len(self._classes))
+        others = [i for i in self._holders(mass, a.part, max(a.hypothesis, 0))
+                  if i != rep and mass[i] > 0]  # fmt: skip
+        chosen = [rep, *others][:REAL_PLAN_MODELS]
+        return [(i, self._best_state(i) or w.initial[i]) for i in chosen]
+
     def _likeliest(self, a: ManipAction, rng: np.random.Generator) -> tuple[int, WorldState]:
-        """The model the real robot plans ``a`` against, and its state: for an opening
-        or a probe, the hypothesis's representative (:meth:`_representatives`, in its
-        likeliest current state); for Pick
-        and Place, the likeliest particle that has the action's part and whose twin can
+        """The model the real robot plans Pick or Place against, and its state: the
+        likeliest particle that has the action's part and whose twin can
         make the action (not ``ik_infeasible``, not :data:`NOT_APPLICABLE`; the search
         chose the action for the models that can, and a plan made in one that cannot
         fails before anything moves), else the likeliest that has the part."""
         w = self._need_worlds()
-        if a.skill not in ("Pick", "Place"):
-            holder = self._rep(a)
-            return holder, self._best_state(holder) or w.initial[holder]
         b = self._belief
         if b is None:
             return 0, w.initial[0]
