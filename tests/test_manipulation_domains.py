@@ -4,6 +4,7 @@ and determinism (cabinet seeds below 1,000: the episodes' own seeds are held out
 from __future__ import annotations
 
 import dataclasses
+import re
 
 import numpy as np
 import pytest
@@ -13,7 +14,11 @@ from planners.errors import ConfigError, UnknownNameError
 from planners.solvers import SOLVERS, make_solver
 from strug_manip.domains import MANIPULATION_DOMAINS, make_domain
 from strug_manip.domains.manipulation.actions import TABLE, ManipAction, part_kind
-from strug_manip.domains.manipulation.model import BEFORE_MOTION, REPEATS_ITSELF
+from strug_manip.domains.manipulation.model import (
+    BEFORE_MOTION,
+    REAL_PLAN_MODELS,
+    REPEATS_ITSELF,
+)
 from strug_manip.domains.manipulation.state import ManipObservation, observation_key
 from strug_manip.experiments.episode import run_episode
 from strug_manip.objects.hypotheses import BelievedJoint, model_of
@@ -556,3 +561,73 @@ def test_an_opening_follows_the_likeliest_particle_of_its_hypothesis(drawer_epis
         assert not (np.allclose(moved.axis, joint.axis) and np.allclose(moved.origin, joint.origin))
     finally:
         d._reps = old
+
+
+def _undo_real_steps(d, s0, belief, n0: int) -> None:
+    """The real episode of ``d`` back at ``s0`` with ``belief``, its outcomes after the
+    first ``n0`` dropped."""
+    del d.real.outcomes[n0:], d.real.labels[n0:]
+    d.real.world.restore(s0.sim)
+    d.real.weighed = b""
+    d.real.refused.clear()
+    d.real.now, d.real.still = 0, False
+    d.condition(belief)
+
+
+def test_a_real_opening_that_cannot_start_is_planned_in_the_next_holder(
+    drawer_episode, monkeypatch
+):
+    """The full robot plans an opening in its hypothesis's representative's model; when
+    that plan cannot start (nothing moves: no evidence, a step lost), it plans in the
+    next likeliest holders' models before it spends the step."""
+    d, s0, belief = drawer_episode
+    d.condition(belief)
+    rng = np.random.default_rng(0)
+    mass = d._mass(belief)
+    a, held = next(
+        (ManipAction("OpenDrawer", k, h), d._holders(mass, k, h))
+        for k, part in enumerate(d.parts)
+        for h, kind in enumerate(part.hypotheses)
+        if kind == "drawer" and len(d._holders(mass, k, h)) >= 3
+    )
+    rep = d._rep(a)
+    assert [i for i, _ in d._plan_models(a, rng)] == held[:REAL_PLAN_MODELS]
+    assert held[0] == rep and REAL_PLAN_MODELS >= 2
+    skills = d._skills
+
+    def no_plan_in_rep(i, act, sim, holder=None):
+        return ([], None) if holder == rep else skills(i, act, sim, holder)
+
+    monkeypatch.setattr(d, "_skills", no_plan_in_rep)
+    n0 = len(d.real.outcomes)
+    try:
+        step = d.step(s0, a, rng)
+        m = re.search(r"\[planned in model (\d+), after (\d) that could not start\]",
+                      step.obs.summary)  # fmt: skip
+        assert m, step.obs.summary
+        assert int(m[1]) == held[int(m[2])] and int(m[2]) >= 1
+        assert len(d.real.outcomes) == n0 + 1  # one step, whatever was planned
+    finally:
+        _undo_real_steps(d, s0, belief, n0)
+
+
+def test_the_real_pick_routes_in_the_models_current_state(drawer_episode, monkeypatch):
+    """The full robot's route from the cabinet to the table is planned with the parts
+    where the model it plans in has them now (a door it opened stands in the way), not
+    in the search's shared planning world of the closed cabinet (model 0 as
+    perceived), through which the arm once swept an open door shut."""
+    d, s0, belief = drawer_episode
+    d.condition(belief)
+    rng = np.random.default_rng(0)
+    pick = ManipAction("Pick", grasp="top")
+    i, state = d._likeliest(pick, rng)
+    calls = []
+    fetch = d.worlds.fetch
+    monkeypatch.setattr(d.worlds, "fetch", lambda j, st=None: calls.append((j, st)) or fetch(j, st))
+    n0 = len(d.real.outcomes)
+    try:
+        step = d.step(s0, pick, rng)
+        assert step.obs.key[1] == 1.0, step.obs.summary
+        assert calls and calls[-1][0] == i and calls[-1][1] is state
+    finally:
+        _undo_real_steps(d, s0, belief, n0)
