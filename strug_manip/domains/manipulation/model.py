@@ -176,6 +176,9 @@ class RealEpisode:
             representative.
         now: the step count of the states after the last real step (the root's).
         still: the last real step stopped before anything moved (:data:`BEFORE_MOTION`).
+        handles: the true cabinet's graspable parts' handles where they were when the
+            episode began, world (3,) [m], by link: what tells which real part an
+            opening or a probe acts on (:meth:`ManipulationPOMDP._real_part`).
     """
 
     world: ManipulationWorld
@@ -189,6 +192,7 @@ class RealEpisode:
     refused: set[tuple[ManipAction, int]] = field(default_factory=set)
     now: int = 0
     still: bool = False
+    handles: dict[str, np.ndarray] = field(default_factory=dict)
 
 
 class ManipulationPOMDP(GenerativePOMDP):
@@ -415,7 +419,7 @@ class ManipulationPOMDP(GenerativePOMDP):
                 if not drawn or attempt == MAX_DRAWS - 1:
                     raise
         world.reset()
-        self.real = RealEpisode(world, seed, target, point, [], [])
+        self.real = RealEpisode(world, seed, target, point, [], [], handles=_handles(world))
         self._home = world.object_pose().copy()  # where Place(table) puts it back
         self.timers = Timers(setup=time.perf_counter() - t0)
         return ManipState(REAL, world.snapshot(), 0)
@@ -793,20 +797,22 @@ class ManipulationPOMDP(GenerativePOMDP):
         spec = world.scene.cabinet_spec
         T = world.cabinet_pose()
         qs = world.part_positions()
-        if i == REAL:
-            ref = self.parts[a.part].point
-            pts = [(p, part_point(p, qs[world.scene.cabinet_prefix + p.joint], T))
-                   for p in spec.movable_parts]  # fmt: skip
-            pts = [(p, x) for p, x in pts if x is not None]
-            if not pts:
-                return np.zeros(3)
-            return min(pts, key=lambda px: np.linalg.norm(px[1] - ref))[1]
-        link = self.parts[a.part].links[i]
+        link = self._real_part(a) if i == REAL else self.parts[a.part].links[i]
         if link is None:
             return np.zeros(3)
         p = spec.part(link)
         pt = part_point(p, qs.get(world.scene.cabinet_prefix + p.joint, 0.0), T)
         return np.zeros(3) if pt is None else pt
+
+    def _real_part(self, a: ManipAction) -> str | None:
+        """The true cabinet's part (link) that opening or probe ``a`` acts on: the one
+        whose handle, where it was when the episode began, is nearest the catalogued
+        part's point. Not where the handles are now: a door swung open puts its handle
+        far from where it was named, nearer another part's, and its motion would be
+        measured on that other part."""
+        handles = self._need_real().handles
+        ref = self.parts[a.part].point
+        return min(handles, key=lambda k: float(np.linalg.norm(handles[k] - ref)), default=None)
 
     def _reward(self, spec: CabinetSpec, target: str | None, world, out: Outcome) -> float:
         """-10 when dragged; +10 when a ``Place`` leaves the object resting in the target
@@ -995,6 +1001,18 @@ def _attempt(run) -> Outcome | None:
         return run()
     except (ConfigError, UnknownNameError):
         return None
+
+
+def _handles(world: ManipulationWorld) -> dict[str, np.ndarray]:
+    """The handles of ``world``'s cabinet's graspable parts where they are now, world
+    (3,) [m], by link (:func:`.actions.part_point`)."""
+    T, qs = world.cabinet_pose(), world.part_positions()
+    out = {}
+    for p in world.scene.cabinet_spec.movable_parts:
+        pt = part_point(p, qs[world.scene.cabinet_prefix + p.joint], T)
+        if pt is not None:
+            out[p.link] = pt
+    return out
 
 
 def _position(world: ManipulationWorld, joint: str) -> float:
