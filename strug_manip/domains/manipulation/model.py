@@ -133,7 +133,7 @@ BEFORE_MOTION_CODES = frozenset(STATUS_CODES[x] for x in BEFORE_MOTION)
 #: and is no evidence, so the belief cannot steer away from it; another holder's model
 #: differs in where the handle, the hinge and the other parts are (a holder that
 #: believes a neighbouring door ajar finds the approach to the target blocked).
-#: Planning is cheap next to a step; three keeps a step's worst case a few seconds.
+#: Planning is cheap next to a step; three bounds what a step may spend on it.
 REAL_PLAN_MODELS = 3
 #: ``Place(table)`` with a side grasp starts this much above the object's spot and comes
 #: down to it [m]: the object held level clears the table top (a top grasp comes down
@@ -809,7 +809,7 @@ class ManipulationPOMDP(GenerativePOMDP):
         whose handle, where it was when the episode began, is nearest the catalogued
         part's point. Not where the handles are now: a door swung open puts its handle
         far from where it was named, nearer another part's, and its motion would be
-        measured on that other part."""
+        measured on that other part. None: the cabinet has no graspable part."""
         handles = self._need_real().handles
         ref = self.parts[a.part].point
         return min(handles, key=lambda k: float(np.linalg.norm(handles[k] - ref)), default=None)
