@@ -616,6 +616,30 @@ def test_run_batch_equals_per_twin_runs(worlds, ctx) -> None:
     assert not alone[0].same_as(alone[1]) and not alone[0].same_as(alone[2])
 
 
+def test_twins_standing_elsewhere_share_one_placement_search(worlds) -> None:
+    """The base placement search sees the robot's base only through the work direction
+    of a plan whose approach is vertical; a door's is not, so a twin standing elsewhere
+    (a particle after another skill) takes the placement another twin found for the
+    same plan in the same world, and gets the outcome it gets with a search of its own."""
+    world = worlds["mixed_17"]
+    spec, T = world.scene.cabinet_spec, world.scene.T_world_cabinet
+    part = spec.part("link_5")
+    skill = OpenDoor(handle_grasps(part, 0.0, T)[0], BelievedJoint.of_part(part, 0.0, T))
+    believed = ManipulationWorld(world.config)  # the world both particles plan in
+    elsewhere = np.array([0.1, 0.05, 0.1])
+    ctx = ControlContext()
+    here, there = (PlanningTwin(spec, world.config, ctx) for _ in range(2))
+    here.reset()
+    skill.simulate(here, plan_world=believed)
+    misses = ctx.placement_misses
+    there.reset(None, elsewhere)
+    shared = skill.simulate(there, plan_world=believed)
+    assert ctx.placement_misses == misses  # served, not searched again
+    alone = PlanningTwin(spec, world.config, ControlContext())
+    alone.reset(None, elsewhere)
+    assert skill.simulate(alone, plan_world=believed).same_as(shared), shared.summary()
+
+
 def test_what_the_twin_derives_from_a_placement_goes_with_it(worlds) -> None:
     """The twin keeps what it derives from a placement (servos, base response, arm and
     stow paths) per placement *object*, not per id: a simulation again finds it, and

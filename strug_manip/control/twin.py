@@ -80,7 +80,7 @@ from strug_manip.control.execution import (
 from strug_manip.control.grasps import held_grasp
 from strug_manip.control.outcome import Outcome, SkillStop, Status
 from strug_manip.control.params import DEFAULT_PARAMS, SkillParams
-from strug_manip.control.placement import Placement, find_placement
+from strug_manip.control.placement import Placement, find_placement, work_frame
 from strug_manip.control.plan import Grip, Line, SkillPlan
 from strug_manip.objects.generator import CabinetSpec
 from strug_manip.robot.fetch import (
@@ -308,9 +308,10 @@ class PlanningTwin:
             hints.put(plan, base, found)
             return found
 
-        return self.ctx.placement(
-            ("twin", self._token(pw), plan.key, base.round(4).tobytes(), state, obj), search
-        )
+        # The search sees the robot's base only through the candidates' work direction
+        # (placement.work_frame), so particles standing elsewhere share one search.
+        frame = np.round(work_frame(plan, base)[1], 4).tobytes()
+        return self.ctx.placement(("twin", self._token(pw), plan.key, frame, state, obj), search)
 
     def _token(self, pw: ManipulationWorld | None) -> object:
         """A key for planning world ``pw`` in the context's placement cache
