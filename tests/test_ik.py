@@ -191,3 +191,75 @@ def test_collision_avoidance_limit_keeps_gripper_off_the_base(kin):
     assert colliding == clear == 3
     with pytest.raises(UnknownNameError):
         body_geoms(m, ["no_such_body"])
+
+
+@pytest.mark.parametrize(
+    ("include_base", "posture", "line", "pairs"),
+    [
+        (False, True, False, False),  # a key pose far from its target
+        (False, False, False, False),  # near it: the frame task alone
+        (True, True, False, False),  # whole body: the base's damping
+        (False, False, True, False),  # a tracked line: the torso's damping
+        (True, False, True, False),
+        (False, True, False, True),  # a collision limit's rows
+    ],
+)
+def test_the_reduced_qp_step_is_minks(include_base, posture, line, pairs):
+    """Each iteration's step is the one mink.solve_ik gives for the same tasks and
+    limits with the joints that do not move frozen by equality rows (what the IK did
+    before it eliminated those rows), to rounding, from configurations near the limits
+    (bounds active) and far from the target (the LM term large)."""
+    import mink
+
+    from strug_manip.control.ik import LIMIT_MARGIN, TORSO_COST
+
+    m = mujoco.MjModel.from_xml_path(str(FETCH_XML))
+    grip = body_geoms(m, ["gripper_link", "r_gripper_finger_link", "l_gripper_finger_link"])
+    body = body_geoms(m, ["base_link", "torso_fixed_link"])
+    base_cost = 7.0
+    ik = FetchIK(
+        m,
+        include_base=include_base,
+        base_cost=base_cost,
+        posture_cost=0.05,
+        collision_pairs=[(grip, body)] if pairs else None,
+    )
+    dof = {j: int(m.jnt_dofadr[m.joint(j).id]) for j in ik.active_joints}
+    cost = np.full(m.nv, 1e-3)  # the damping task's costs, as documented
+    if line:
+        cost[dof["torso_lift_joint"]] = 1e-3 * TORSO_COST
+    if include_base:
+        for j in BASE_JOINTS:
+            cost[dof[j]] = 1e-3 * base_cost
+    tasks = [ik._frame]
+    posture_task = mink.PostureTask(m, cost=0.05)
+    if posture:
+        tasks.append(posture_task)
+    if include_base or line:
+        tasks.append(mink.DampingTask(m, cost))
+    frozen = mink.DofFreezingTask(m, [i for i in range(m.nv) if i not in dof.values()])
+    limits = ik.joint_limits()
+    rng = np.random.default_rng(11)
+    for _ in range(20):
+        q = ik._q_default.copy()
+        for j in ik.active_joints:
+            lo, hi = limits[j]
+            lo, hi = (lo, hi) if math.isfinite(lo) else (-1.0, 1.0)
+            # Half the samples within 2 cm of a limit, where its bound is active.
+            edge = rng.uniform(LIMIT_MARGIN, LIMIT_MARGIN + 0.02)
+            q[m.jnt_qposadr[m.joint(j).id]] = rng.choice(
+                [rng.uniform(lo + 0.05, hi - 0.05), lo + edge, hi - edge]
+            )
+        target = ik.forward({j: float(rng.uniform(*limits[j])) for j in IK_JOINTS})
+        target[:3, 3] += rng.normal(0.0, 0.3, 3)
+        ik._config.update(q)
+        ik._frame.set_target(mink.SE3.from_matrix(target))
+        goal = ik._q_default.copy()
+        posture_task.set_target(goal)
+        ours = ik._step(ik._line_diag if line else ik._solve_diag, goal if posture else None)
+        theirs = mink.solve_ik(
+            ik._config, tasks, 1.0, "daqp", damping=ik.damping,
+            limits=ik._limits, constraints=[frozen],
+        )  # fmt: skip
+        assert ours is not None
+        np.testing.assert_allclose(ours, theirs, rtol=0, atol=1e-9)

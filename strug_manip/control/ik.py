@@ -12,7 +12,7 @@ quadratic program (solver ``daqp``) with
 * a :class:`mink.ConfigurationLimit` (joint limits) and, optionally, a
   :class:`mink.CollisionAvoidanceLimit` between the given geom groups,
 * the joints that do not take part (base unless ``include_base``, head, fingers) held
-  by a :class:`mink.DofFreezingTask` equality constraint;
+  still: the QP is mink's with their equality rows eliminated (:class:`_ReducedQP`);
 * with ``include_base``, a :class:`mink.DampingTask` that makes base motion
   ``base_cost`` times dearer than arm motion, so the base moves only where the arm
   alone cannot follow.
@@ -40,6 +40,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+import daqp
 import mink
 import mujoco
 import numpy as np
@@ -166,6 +167,102 @@ def _rotation_angle(R: np.ndarray) -> float:
     return 2.0 * math.atan2(float(np.linalg.norm(quat[1:])), abs(float(quat[0])))
 
 
+#: What DAQP takes for an absent bound (qpsolvers' convention).
+_NO_BOUND = 1e30
+
+
+class _ReducedQP:
+    """The differential-IK quadratic program of :func:`mink.solve_ik`, over the moving
+    dofs only.
+
+    mink builds it over all ``nv`` dofs and holds the others still with equality rows
+    (:class:`mink.DofFreezingTask`); with those rows eliminated the QP is the same
+    problem with ``k`` variables and its joint limits simple bounds, which DAQP (the
+    solver mink calls through qpsolvers) takes as such. The frame task's residual is
+    mink's own; the posture and damping terms are diagonal and added as such. The
+    step equals mink's to rounding (``tests/test_ik.py``) at a fraction of its cost:
+    the generic assembly and qpsolvers' checks were most of a placement search's time.
+
+    Args:
+        model: the IK's model; joints: the moving joints (hinge or slide), k of them.
+        limit: the model's :class:`mink.ConfigurationLimit` (bounds and gain).
+        posture_cost: the posture task's cost per dof [-].
+    """
+
+    def __init__(
+        self,
+        model: mujoco.MjModel,
+        joints: Sequence[str],
+        limit: mink.ConfigurationLimit,
+        posture_cost: float,
+    ) -> None:
+        ids = [model.joint(j).id for j in joints]
+        self.dofs = np.array([int(model.jnt_dofadr[i]) for i in ids])
+        self.qadr = np.array([int(model.jnt_qposadr[i]) for i in ids])
+        limited = np.isin(self.dofs, limit.indices)
+        self._limited = limited
+        self._lower = np.where(limited, limit.lower[self.qadr], 0.0)
+        self._upper = np.where(limited, limit.upper[self.qadr], 0.0)
+        self._gain = float(limit.gain)
+        self._posture = posture_cost**2
+        self._sense = np.zeros(len(ids), dtype=np.intc)
+        self._no_rows = np.zeros((0, len(ids)))
+        self.nv = model.nv
+
+    def velocity(
+        self,
+        config: mink.Configuration,
+        frame: mink.FrameTask,
+        diag: np.ndarray,
+        damping: float,
+        posture: np.ndarray | None = None,
+        limits: Sequence[mink.Limit] = (),
+    ) -> np.ndarray | None:
+        """The step (nv,) of ``mink.solve_ik(config, [frame, posture task, damping
+        task], 1.0, "daqp", damping, [configuration limit, *limits], freezing)``.
+
+        Args:
+            config: the configuration (its kinematics up to date).
+            frame: the gripper's frame task (target set).
+            diag: the damping tasks' squared costs per moving dof, (k,) [-].
+            damping: the Levenberg-Marquardt damping on every dof [-].
+            posture: the posture target (nq,), or None without the posture task.
+            limits: further limits (collision avoidance), their rows restricted to
+                the moving dofs.
+
+        Returns:
+            The step per dof (frozen dofs 0) [rad or m], or None where DAQP finds no
+            solution (mink raises :class:`mink.NoSolutionFound`).
+        """
+        W, e, mu = frame.compute_qp_residual(config)
+        Wa = W[:, self.dofs]
+        H = Wa.T @ Wa
+        c = -(e @ Wa)
+        d = diag + (damping + mu)
+        q = config.q[self.qadr]
+        if posture is not None:
+            d = d + self._posture
+            c += self._posture * (q - posture[self.qadr])
+        H.flat[:: len(d) + 1] += d
+        upper = np.where(self._limited, self._gain * (self._upper - q), _NO_BOUND)
+        lower = np.where(self._limited, self._gain * (self._lower - q), -_NO_BOUND)
+        A, sense = self._no_rows, self._sense
+        rows = [lim.compute_qp_inequalities(config, 1.0) for lim in limits]
+        rows = [con for con in rows if not con.inactive]
+        if rows:
+            A = np.vstack([con.G[:, self.dofs] for con in rows])
+            h = np.concatenate([con.h for con in rows])
+            upper = np.concatenate([upper, h])
+            lower = np.concatenate([lower, np.full(len(h), -_NO_BOUND)])
+            sense = np.zeros(len(upper), dtype=np.intc)
+        x, _, flag, _ = daqp.solve(H, c, A, upper, lower, sense)
+        if flag <= 0:
+            return None
+        v = np.zeros(self.nv)
+        v[self.dofs] = x
+        return v
+
+
 class FetchIK:
     """Gripper-pose inverse kinematics of the Fetch with mink.
 
@@ -189,7 +286,7 @@ class FetchIK:
         restarts: random restarts after a failed or stalled first attempt.
         seed: seed of the restarts' random configurations.
         damping: Levenberg-Marquardt damping of the QP [-], on every joint.
-        solver: the QP solver mink passes to qpsolvers.
+        solver: the QP solver; only ``"daqp"`` (the reduced QP calls it directly).
 
     Raises:
         ConfigError: a bad option, or ``model`` lacks the gripper site.
@@ -225,6 +322,8 @@ class FetchIK:
         self.restarts = check_positive_int("restarts", restarts, allow_zero=True)
         self.seed = check_positive_int("seed", seed, allow_zero=True)
         self.damping = check_positive_float("damping", damping, allow_zero=True)
+        if solver != "daqp":
+            raise ConfigError(f"solver must be one of ['daqp'], got {solver!r}")
         self.solver = solver
 
         if model is None:
@@ -246,8 +345,6 @@ class FetchIK:
         self.robot_joints: tuple[str, ...] = tuple(j for j in ALL_JOINTS if j in joint_names)
         self._qadr = {j: int(model.jnt_qposadr[model.joint(j).id]) for j in joint_names}
         self._active_qadr = np.array([self._qadr[j] for j in self.active_joints])
-        active_dofs = {int(model.jnt_dofadr[model.joint(j).id]) for j in self.active_joints}
-        frozen = [i for i in range(model.nv) if i not in active_dofs]
         if any(model.jnt_type[j] == mujoco.mjtJoint.mjJNT_BALL for j in range(model.njnt)):
             raise ConfigError("the IK model must not have ball joints")
         # Bounds of the active joints (unlimited: +-inf), for restarts and clipping.
@@ -277,7 +374,6 @@ class FetchIK:
             orientation_cost=orientation_cost,
             lm_damping=1.0,
         )
-        self._posture_task = mink.PostureTask(model, cost=posture_cost)
         self._limits: list[mink.Limit] = [
             mink.ConfigurationLimit(model, min_distance_from_limits=LIMIT_MARGIN)
         ]
@@ -296,22 +392,23 @@ class FetchIK:
                 raise ConfigError(f"bad collision_pairs {collision_pairs!r}: {exc}") from None
             self._limits.append(limit)
             self._geom_pairs = [(int(a), int(b)) for a, b in limit.geom_id_pairs]
-        self._constraints = [mink.DofFreezingTask(model, frozen)] if frozen else []
-        self._damping_tasks: list[mink.Task] = []
+        self._qp = _ReducedQP(model, self.active_joints, self._limits[0], posture_cost)
+        # Diagonal costs of the moving dofs [-] (mink.DampingTask's, squared). Solves:
+        # with ``include_base``, base motion ``base_cost`` times dearer than the arm's.
+        dof = {j: k for k, j in enumerate(self.active_joints)}
+        self._solve_diag = np.zeros(len(self.active_joints))
         if include_base:
-            cost = np.full(model.nv, 1e-3)
             base_cost = check_positive_float("base_cost", base_cost)
+            self._solve_diag[:] = 1e-3**2
             for j in BASE_JOINTS:
-                cost[model.jnt_dofadr[model.joint(j).id]] = 1e-3 * base_cost
-            self._damping_tasks = [mink.DampingTask(model, cost)]
+                self._solve_diag[dof[j]] = (1e-3 * base_cost) ** 2
         # Lines leave the torso alone where the arm can follow (it is 10x slower than
         # the arm joints: 0.1 m/s), as the base where the arm alone can.
-        cost = np.full(model.nv, 1e-3)
-        cost[model.jnt_dofadr[model.joint(TORSO_JOINT).id]] = 1e-3 * TORSO_COST
+        self._line_diag = np.full(len(self.active_joints), 1e-3**2)
+        self._line_diag[dof[TORSO_JOINT]] = (1e-3 * TORSO_COST) ** 2
         if include_base:
             for j in BASE_JOINTS:
-                cost[model.jnt_dofadr[model.joint(j).id]] = 1e-3 * base_cost
-        self._line_tasks: list[mink.Task] = [mink.DampingTask(model, cost)]
+                self._line_diag[dof[j]] = (1e-3 * base_cost) ** 2
 
     # -- helpers -------------------------------------------------------------------------
 
@@ -361,6 +458,13 @@ class FetchIK:
         return min(
             (mujoco.mj_geomDistance(m, d, a, b, cap, None) for a, b in self._geom_pairs),
             default=math.inf,
+        )
+
+    def _step(self, diag: np.ndarray, posture: np.ndarray | None = None) -> np.ndarray | None:
+        """One differential-IK step (nv,) from the current configuration (None: no QP
+        solution); ``diag``: the damping costs, ``posture``: the posture target (nq,)."""
+        return self._qp.velocity(
+            self._config, self._frame, diag, self.damping, posture, self._limits[1:]
         )
 
     def joint_limits(self) -> dict[str, tuple[float, float]]:
@@ -460,9 +564,6 @@ class FetchIK:
         posture_q = q0.copy()
         for j, v in self.posture.items():
             posture_q[self._qadr[j]] = v
-        self._posture_task.set_target(posture_q)
-        with_posture = [self._frame, self._posture_task, *self._damping_tasks]
-        frame_only = [self._frame, *self._damping_tasks]
         near_rot = 10.0 * self.posture_until
 
         rng = np.random.default_rng(self.seed)
@@ -501,18 +602,9 @@ class FetchIK:
                         break
                 if it == max_iters:
                     break
-                tasks = frame_only if ep < self.posture_until and er < near_rot else with_posture
-                try:
-                    v = mink.solve_ik(
-                        config,
-                        tasks,
-                        1.0,
-                        self.solver,
-                        damping=self.damping,
-                        limits=self._limits,
-                        constraints=self._constraints,
-                    )
-                except mink.NoSolutionFound:
+                near = ep < self.posture_until and er < near_rot
+                v = self._step(self._solve_diag, None if near else posture_q)
+                if v is None:
                     break
                 config.integrate_inplace(v, 1.0)
                 iterations += 1
@@ -571,7 +663,6 @@ class FetchIK:
         self._clip_into_limits(q)
         config = self._config
         config.update(q)
-        tasks = [self._frame, *self._line_tasks]
         out: list[np.ndarray] = []
         worst = (0.0, 0.0)
         prev = q[self._active_qadr].copy()
@@ -582,17 +673,8 @@ class FetchIK:
             for _ in range(max_iters):
                 if ep <= pos_tol and er <= rot_tol:
                     break
-                try:
-                    v = mink.solve_ik(
-                        config,
-                        tasks,
-                        1.0,
-                        self.solver,
-                        damping=self.damping,
-                        limits=self._limits,
-                        constraints=self._constraints,
-                    )
-                except mink.NoSolutionFound:
+                v = self._step(self._line_diag)
+                if v is None:
                     break
                 config.integrate_inplace(v, 1.0)
                 ep, er = self._errors(p_goal, R_goal)
