@@ -62,6 +62,22 @@ def test_contacts_name_the_bodies_and_allowed_pairs_clear_them(checker, ik) -> N
     assert hits and not any("cabinet" in h for h in hits), hits
 
 
+def test_the_hand_depth_grows_as_the_fingers_meet_the_front(checker, ik) -> None:
+    """How deep the hand is in the scene at the last check: 0 where it is free, and,
+    as the fingertips first meet the drawer's front (TCP at x = 0.955 m), growing as
+    much as the TCP is pushed; 0 again once the contact is allowed."""
+    depths = []
+    for x in (0.94, 0.96, 0.965, 0.97):
+        checker.free(arm_at(ik, (x, 0.0, 1.06)))
+        depths.append(checker.hand_depth())
+    assert depths[0] == 0.0
+    assert 0.0 < depths[1] < depths[2] < depths[3], depths
+    assert abs((depths[3] - depths[1]) - 0.01) < 0.003, depths
+    checker.allow(checker.hand_with([checker.body_id("cabinet/link_1")]))
+    checker.free(arm_at(ik, (0.97, 0.0, 1.06)))
+    assert checker.hand_depth() == 0.0
+
+
 def test_the_checker_sees_the_state_it_was_loaded_with(world, ik) -> None:
     """Opened 0.2 m, the top drawer fills where the hand was free (the drawer's front
     comes to x = 0.76 m); set() moves a joint of the scratch state without physics."""

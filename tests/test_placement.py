@@ -8,6 +8,8 @@ at (0.98, 0, 1.06) m, 0.215 m of travel.
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -17,6 +19,7 @@ from strug_manip.control.outcome import SkillStop, Status
 from strug_manip.control.placement import (
     CANDIDATES,
     HAND_IN_COLLISION,
+    LINE_HAND_IN_COLLISION,
     MAX_CANDIDATES,
     Placement,
     find_placement,
@@ -114,6 +117,24 @@ def test_a_pre_grasp_with_the_hand_in_the_cabinet_is_tried_from_one_base(world, 
     assert f"{HAND_IN_COLLISION}: 2" in stop.value.detail
     # Unchecked (the twin's kinematic search) the same pre-grasp is reachable.
     assert search(ctx, world, SkillPlan("Reach", _at(1.05, 1.06), ()), checked=False).lines == ()
+
+
+def test_a_line_with_the_hand_deep_in_the_cabinet_is_tried_from_one_base(world, ctx) -> None:
+    """A free pre-grasp 0.2 m before the top drawer, its approach line 5 cm into the
+    drawer's front: the hand's poses along the line are the plan's from every base, so
+    after the first base that tracks it (fingers either way) no other is tried; the
+    same line stopped before the front gets a placement."""
+    world.reset()
+    pre = _at(0.85, 1.06)
+    into = line_of("approach", straight(pre, np.array([0.2, 0.0, 0.0]), 0.02), 0.1)
+    with pytest.raises(SkillStop) as stop:
+        search(ctx, world, SkillPlan("Reach", pre, (into,)))
+    assert stop.value.status is Status.IK_INFEASIBLE
+    hits = re.search(rf"approach {LINE_HAND_IN_COLLISION}: (\d+)", stop.value.detail)
+    assert hits is not None and hits.group(1) == "2", stop.value.detail
+    assert f"of {2 * MAX_CANDIDATES} reaches" not in stop.value.detail
+    short = line_of("approach", straight(pre, np.array([0.02, 0.0, 0.0]), 0.02), 0.1)
+    assert len(search(ctx, world, SkillPlan("Reach", pre, (short,))).lines) == 1
 
 
 def _at(x: float, z: float) -> np.ndarray:

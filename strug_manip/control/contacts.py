@@ -257,6 +257,22 @@ class ContactChecker:
         scene = ~self._counts
         return bool(np.any((hand[a] & scene[b]) | (hand[b] & scene[a])))
 
+    def hand_depth(self) -> float:
+        """How deep [m] the hand (as in :meth:`hand_in_scene`) is in the scene at the
+        configuration of the last check (:meth:`free`, :meth:`pairs`): the deepest
+        forbidden contact between them (0 if none; MuJoCo's ``-dist``)."""
+        d = self.data
+        if d.ncon == 0:
+            return 0.0
+        bodies = self.geom_body[d.contact.geom]
+        a, b = bodies[:, 0], bodies[:, 1]
+        hand = self._hand_rigid.copy()
+        if self._attached is not None:
+            hand[self._attached[0]] = True
+        scene = ~self._counts
+        bad = ((hand[a] & scene[b]) | (hand[b] & scene[a])) & ~self._allowed[a, b]
+        return float(max(0.0, np.max(-d.contact.dist[bad], initial=0.0)))
+
     def contacts(self, q: np.ndarray) -> list[str]:
         """Forbidden contacts at ``q`` as sorted ``body1/body2`` names ([] if none)."""
         m = self.model

@@ -16,6 +16,12 @@ taken when, with the base there,
    out of reach), each pose free of contacts except the hand's with what it may touch,
    the believed part moved along with the gripper.
 
+A failure that holds for every base of the plan ends the search of that plan (fingers
+that way) at the first base that shows it: the hand in the scene at the pre-grasp
+(:data:`HAND_IN_COLLISION`) or deeper than :data:`LINE_HAND_DEPTH` along a line
+(:data:`LINE_HAND_IN_COLLISION`), since the hand's poses are the plan's, to the IK's
+tolerance, whichever base the arm reaches them from.
+
 Steps 1 and the contact checks need the planning world (the believed cabinet); the
 planning twin runs the search kinematically (``checker=None``), so the same plan gives
 the same placement and the same ``ik_infeasible`` on every particle it is simulated on.
@@ -62,6 +68,15 @@ COMPARED = 3
 #: tried; this was two thirds of the planning twin's time on a cabinet whose believed
 #: part the hand cannot get at.
 HAND_IN_COLLISION = "pre-grasp hand in collision"
+#: Why a candidate fails when a line takes the hand (or the held object) into the
+#: scene deeper than :data:`LINE_HAND_DEPTH`: as at the pre-grasp, the hand's poses
+#: along the lines are the plan's whichever base the arm follows them from, so no other
+#: base of that plan is tried.
+LINE_HAND_IN_COLLISION = "line hand in collision"
+#: Depth [m] beyond which a line's hand contact with the scene is the plan's, not the
+#: IK's: the tracked poses miss the plan's by up to the tracking tolerance (2 mm), so a
+#: shallower graze may come and go with the base (README, "Manipulation tasks").
+LINE_HAND_DEPTH = 0.002
 #: Forward offset of the shoulder pan axis from the base centre [m] (fetch.xml).
 SHOULDER_FORWARD = 0.0326
 #: Relative cost of base motion in whole-body lines [-].
@@ -188,9 +203,15 @@ def candidate_bases(plan: SkillPlan, robot_base: np.ndarray) -> list[np.ndarray]
     return out
 
 
-def _line_free(checker: ContactChecker, line: Line, qs: np.ndarray, bases: np.ndarray) -> list:
-    """Contacts along a tracked line (hand with ``line.touch`` allowed; the believed part
-    moved along, then put back); [] if free."""
+def _plan_level(why: str) -> bool:
+    """Whether a candidate's failure ``why`` holds for every base of its plan."""
+    return why == HAND_IN_COLLISION or why.endswith(LINE_HAND_IN_COLLISION)
+
+
+def _line_hits(checker: ContactChecker, line: Line, qs: np.ndarray, bases: np.ndarray) -> float:
+    """Whether a tracked line meets the scene (hand with ``line.touch`` allowed; the
+    believed part moved along, then put back): -1 if free, else how deep the hand is in
+    the scene at the first pose with a forbidden contact [m] (0: another body's)."""
     touch = [checker.body_id(b) for b in line.touch]
     checker.allow(checker.hand_with(touch))
     moving = line.part_joint is not None and line.part_q is not None
@@ -199,10 +220,9 @@ def _line_free(checker: ContactChecker, line: Line, qs: np.ndarray, bases: np.nd
         for k in range(len(qs)):
             if moving:
                 checker.set({line.part_joint: float(line.part_q[k])})
-            x = np.concatenate([bases[k], qs[k]])
-            if not checker.free(x):
-                return checker.contacts(x)
-        return []
+            if not checker.free(np.concatenate([bases[k], qs[k]])):
+                return checker.hand_depth()
+        return -1.0
     finally:
         if moving:
             checker.set({line.part_joint: q0})
@@ -279,7 +299,7 @@ def find_placement(
             return Placement(base, *found, tried, {}, time.perf_counter() - t0, candidate,
                              candidate=(index, bool(flip)))  # fmt: skip
         reasons[why] = 1
-        if why == HAND_IN_COLLISION:
+        if _plan_level(why):
             hand_blocked.add(int(flip))
     works: list[tuple[float, int, Placement]] = []
     for flip, candidate in enumerate(plans):
@@ -292,7 +312,7 @@ def find_placement(
             why, found = _try(candidate, ik, wb_ik, base, postures, speeds, checker)
             if found is None:
                 reasons[why] = reasons.get(why, 0) + 1
-                if why == HAND_IN_COLLISION:
+                if _plan_level(why):
                     break
                 continue
             q_pre, lines, bases = found
@@ -403,7 +423,9 @@ def _try(
             moved = bs
         else:
             return f"{line.name} line unreachable", None
-        if checker is not None and _line_free(checker, line, qs, bs):
+        if checker is not None and (depth := _line_hits(checker, line, qs, bs)) >= 0.0:
+            if depth > LINE_HAND_DEPTH:
+                return f"{line.name} {LINE_HAND_IN_COLLISION}", None
             return f"{line.name} line in collision", None
         lines.append(qs)
         bases.append(moved)

@@ -20,6 +20,12 @@ import numpy as np
 from planners.errors import ConfigError, UnknownNameError
 from strug_manip.objects.generator import CabinetSpec, PartSpec, axis_angle
 
+#: Tolerances of :func:`check_pose`, as ``np.allclose`` reads them (``atol + 1e-5 *
+#: |expected|``): the last row to 1e-9, ``R^T R`` to the identity to 1e-6.
+_LAST_ROW = np.array([0.0, 0.0, 0.0, 1.0])
+_ROW_TOL = 1e-9 + 1e-5 * _LAST_ROW
+_ORTHO_TOL = 1e-6 + 1e-5 * np.eye(3)
+
 
 def check_pose(name: str, T: object) -> np.ndarray:
     """Return ``T`` as a float (4, 4) rigid transform, or raise :class:`ConfigError`.
@@ -35,12 +41,15 @@ def check_pose(name: str, T: object) -> np.ndarray:
         raise ConfigError(
             f"{name} must be a 4x4 homogeneous transform [m], got shape {arr.shape}: {T!r}"
         )
-    if not np.all(np.isfinite(arr)):
+    if not np.isfinite(arr).all():
         raise ConfigError(f"{name} must be finite, got {arr.tolist()!r}")
-    if not np.allclose(arr[3], (0.0, 0.0, 0.0, 1.0), atol=1e-9):
+    if not (np.abs(arr[3] - _LAST_ROW) <= _ROW_TOL).all():
         raise ConfigError(f"{name} must end with the row (0, 0, 0, 1), got {arr[3].tolist()!r}")
     R = arr[:3, :3]
-    if not np.allclose(R.T @ R, np.eye(3), atol=1e-6) or np.linalg.det(R) < 0:
+    # (The determinant of an orthonormal R is +-1: the sign of the triple product.)
+    (a, b, c), (d, e, f), (g, h, i) = R.tolist()
+    det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
+    if not (np.abs(R.T @ R - np.eye(3)) <= _ORTHO_TOL).all() or det < 0:
         raise ConfigError(
             f"the rotation block of {name} must be a rotation matrix (orthonormal, det +1), "
             f"got {R.tolist()!r}"
