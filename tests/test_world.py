@@ -63,6 +63,11 @@ def test_rgbd_frame_shapes_and_ranges(world) -> None:
     on_cabinet = pts[np.isin(geoms, list(cabinet_geoms))]
     # Every cabinet point lies in the cabinet's footprint, in front of the robot.
     assert on_cabinet[:, 0].min() > world.config.cabinet_distance - 0.02
+    # Without the colour pass: the same depth and segmentation, no colour.
+    bare = world.render("head_camera", colour=False)
+    assert bare.rgb.shape == (0, 0, 3)
+    np.testing.assert_array_equal(bare.depth, frame.depth)
+    np.testing.assert_array_equal(bare.segmentation, frame.segmentation)
 
 
 def test_point_cloud_of_a_known_box_matches_its_geometry() -> None:

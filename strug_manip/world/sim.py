@@ -461,12 +461,16 @@ class ManipulationWorld:
         r.disable_depth_rendering()
         return rgb, depth
 
-    def render(self, camera: str = "head_camera") -> CameraFrame:
-        """RGB, depth [m] and geom segmentation from ``camera``."""
+    def render(self, camera: str = "head_camera", colour: bool = True) -> CameraFrame:
+        """RGB, depth [m] and geom segmentation from ``camera``.
+
+        ``colour=False`` skips the colour pass (about 45 % of the time) and leaves
+        ``rgb`` empty, shape (0, 0, 3): for point clouds, which need depth and
+        segmentation only (:meth:`point_cloud`)."""
         T, fovy = self.camera_pose(camera)
         r = self._renderer_for()
         r.update_scene(self.data, camera=camera)
-        rgb = r.render().copy()
+        rgb = r.render().copy() if colour else np.zeros((0, 0, 3), dtype=np.uint8)
         r.enable_depth_rendering()
         depth = r.render().copy()
         r.disable_depth_rendering()

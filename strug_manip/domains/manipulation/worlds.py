@@ -141,7 +141,7 @@ class ParticleWorlds:
         if cloud is None:
             fw = self.fetch(i, state)
             place_robot(fw, pose)
-            cloud = voxel_thin(cabinet_cloud(fw, fw.render()))
+            cloud = voxel_thin(cabinet_cloud(fw, fw.render(colour=False)))
             self.clouds.store(key, cloud)
         return cloud
 
