@@ -84,7 +84,15 @@ def _check_cloud(name: str, c: object) -> np.ndarray:
 def voxel_thin(points: np.ndarray, voxel: float = VOXEL) -> np.ndarray:
     """One point (the first) per ``voxel`` [m] cube of ``points`` (N, 3), in order."""
     keys = np.floor(points / voxel).astype(np.int64)
-    _, first = np.unique(keys, axis=0, return_index=True)
+    if len(keys) == 0:
+        return points[:0]
+    # One integer per voxel (a row-major index into the cloud's bounding box): the 1-D
+    # unique is several times faster than the row-wise one and keeps the same first
+    # points (both sort stably).
+    keys -= keys.min(axis=0)
+    span = keys.max(axis=0) + 1
+    flat = (keys[:, 0] * span[1] + keys[:, 1]) * span[2] + keys[:, 2]
+    _, first = np.unique(flat, return_index=True)
     return points[np.sort(first)]
 
 

@@ -171,6 +171,22 @@ def test_quantile_hausdorff_matches_its_definition() -> None:
     np.testing.assert_allclose(t, scipy.stats.t.logpdf(got, df=4.0, scale=0.01))
 
 
+def test_voxel_thinning_keeps_the_first_point_of_each_voxel_in_order() -> None:
+    """One point per voxel, the first of the cloud's order, the kept ones in that order:
+    as the row-wise definition (``np.unique(axis=0)`` of the voxel indices) gives,
+    across signs, spans and repeated points; an empty cloud stays empty."""
+    from perception.likelihood import VOXEL, voxel_thin
+
+    rng = np.random.default_rng(5)
+    for n in (1, 7, 2000):
+        pts = rng.uniform(-1.5, 2.5, (n, 3)) * rng.uniform(0.05, 1.0, 3)
+        pts = np.concatenate([pts, pts[::-3]])  # repeats, later: never kept
+        keys = np.floor(pts / VOXEL).astype(np.int64)
+        _, first = np.unique(keys, axis=0, return_index=True)
+        np.testing.assert_array_equal(voxel_thin(pts), pts[np.sort(first)])
+    assert voxel_thin(np.zeros((0, 3))).shape == (0, 3)
+
+
 def test_the_likelihood_keeps_wrong_models_alive_when_none_fits() -> None:
     """Particles 4.5-13 cm off (a part perception got wrong in all of them): the
     Student-t spreads the weight over the near ones, where the Gaussian gives one
