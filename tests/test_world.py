@@ -70,6 +70,34 @@ def test_rgbd_frame_shapes_and_ranges(world) -> None:
     np.testing.assert_array_equal(bare.segmentation, frame.segmentation)
 
 
+def test_worlds_rendering_on_one_shared_context_render_what_their_own_would() -> None:
+    """Two worlds of different cabinets on one RenderContext, rendered by turns: each
+    frame (colour, depth, segmentation) equals its world's render on a context of its
+    own; closing the context frees the renderers, and a new render makes a new one."""
+    from strug_manip.world.rendering import RenderContext
+
+    shared = RenderContext()
+    worlds = [ManipulationWorld(SceneConfig(cabinet_seed=s), render_context=shared)
+              for s in (11, 12)]  # fmt: skip
+    alone = [ManipulationWorld(SceneConfig(cabinet_seed=s)) for s in (11, 12)]
+    try:
+        for _ in range(2):
+            for w, ref in zip(worlds, alone, strict=True):
+                w.reset()
+                ref.reset()
+                a, b = w.render(), ref.render()
+                for x, y in ((a.rgb, b.rgb), (a.depth, b.depth), (a.segmentation, b.segmentation)):
+                    np.testing.assert_array_equal(x, y)
+        shared.close()
+        assert worlds[0]._renderer._mjr_context is None  # freed with the context
+        worlds[0]._renderer = None
+        np.testing.assert_array_equal(worlds[0].render().depth, alone[0].render().depth)
+    finally:
+        for w in (*worlds, *alone):
+            w.close()
+        shared.close()
+
+
 def test_point_cloud_of_a_known_box_matches_its_geometry() -> None:
     eye = (-0.3, 0.4, 0.9)
     axes = " ".join(f"{v:.6f}" for v in look_at_xyaxes(eye, (0.4, -0.2, 0.2)))

@@ -25,6 +25,7 @@ from planners.errors import ConfigError, UnknownNameError
 from strug_manip.objects import CabinetSpec
 from strug_manip.robot.fetch import GRIPPER_OPEN
 from strug_manip.world.floating_gripper import PARK, SLIDES
+from strug_manip.world.rendering import RenderContext
 from strug_manip.world.scene import SceneConfig, SceneModel, build_scene
 
 #: The graspable object's free joint (its pose is observed, not believed).
@@ -123,10 +124,15 @@ class ManipulationWorld:
     Args:
         config: what to build (default: the built-in scene, cabinet seed 3); built in
             memory (:func:`~strug_manip.world.scene.build_scene`).
+        render_context: render on this shared OpenGL context (worlds rendered by turns,
+            e.g. an episode's belief particles); default: a context of its own.
     """
 
-    def __init__(self, config: SceneConfig | None = None) -> None:
+    def __init__(
+        self, config: SceneConfig | None = None, render_context: RenderContext | None = None
+    ) -> None:
         self.config = config or SceneConfig()
+        self._render_context = render_context
         self.scene: SceneModel = build_scene(self.config)
         self.model = self.scene.model
         self.data = mujoco.MjData(self.model)
@@ -146,7 +152,10 @@ class ManipulationWorld:
 
     @classmethod
     def from_cabinet_spec(
-        cls, spec: CabinetSpec, config: SceneConfig | None = None
+        cls,
+        spec: CabinetSpec,
+        config: SceneConfig | None = None,
+        render_context: RenderContext | None = None,
     ) -> ManipulationWorld:
         """The scene of ``config`` (default: the built-in one) with the cabinet ``spec``
         instead of a generated one, e.g. a *planning world* for a believed cabinet
@@ -159,7 +168,7 @@ class ManipulationWorld:
         base = config or SceneConfig()
         if base.cabinet_folder is not None:
             raise ConfigError("a world from a cabinet spec cannot also load cabinet_folder")
-        return cls(dataclasses.replace(base, cabinet_spec=spec))
+        return cls(dataclasses.replace(base, cabinet_spec=spec), render_context)
 
     # --- state -------------------------------------------------------------------------
     def reset(self, part_positions: dict[str, float] | None = None) -> None:
@@ -420,7 +429,11 @@ class ManipulationWorld:
     # --- sensing -----------------------------------------------------------------------
     def _renderer_for(self) -> mujoco.Renderer:
         if self._renderer is None:
-            self._renderer = mujoco.Renderer(self.model, self.config.height, self.config.width)
+            h, w = self.config.height, self.config.width
+            if self._render_context is not None:
+                self._renderer = self._render_context.renderer(self.model, h, w)
+            else:
+                self._renderer = mujoco.Renderer(self.model, h, w)
         return self._renderer
 
     def camera_pose(self, camera: str) -> tuple[np.ndarray, float]:

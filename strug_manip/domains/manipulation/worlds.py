@@ -28,6 +28,7 @@ import numpy as np
 from perception.likelihood import voxel_thin
 from strug_manip.control import ControlContext, PlanningTwin
 from strug_manip.domains.manipulation.belief import Particle
+from strug_manip.world.rendering import RenderContext
 from strug_manip.world.scene import SceneConfig
 from strug_manip.world.sim import ManipulationWorld, WorldState
 from strug_manip.world.views import LookPose, cabinet_cloud, place_robot
@@ -103,6 +104,9 @@ class ParticleWorlds:
             self.twins.append(tw)
             self.initial.append(tw.snapshot())
         self._fetch: dict[int, ManipulationWorld] = {}
+        # The particles' head-camera renders share one OpenGL context (most of a
+        # renderer's set-up is a fresh context's).
+        self._render = RenderContext()
         self.outcomes = LRU(OUTCOMES)
         # Whether an action can start in a particle state, where not simulated yet.
         self.can_start = LRU(OUTCOMES)
@@ -121,7 +125,9 @@ class ParticleWorlds:
         base) as in ``state`` of the particle's twin (default: the initial one)."""
         w = self._fetch.get(i)
         if w is None:
-            w = ManipulationWorld.from_cabinet_spec(self.particles[i].spec, self.config)
+            w = ManipulationWorld.from_cabinet_spec(
+                self.particles[i].spec, self.config, self._render
+            )
             self._fetch[i] = w
         tw = self.twins[i]
         tw.restore(self.initial[i] if state is None else state)
@@ -149,3 +155,4 @@ class ParticleWorlds:
         for w in (*self._fetch.values(), *(t.world for t in self.twins)):
             w.close()
         self._fetch.clear()
+        self._render.close()
