@@ -73,9 +73,11 @@ HAND_IN_COLLISION = "pre-grasp hand in collision"
 #: along the lines are the plan's whichever base the arm follows them from, so no other
 #: base of that plan is tried.
 LINE_HAND_IN_COLLISION = "line hand in collision"
-#: Depth [m] beyond which a line's hand contact with the scene is the plan's, not the
-#: IK's: the tracked poses miss the plan's by up to the tracking tolerance (2 mm), so a
-#: shallower graze may come and go with the base (README, "Manipulation tasks").
+#: Depth [m] beyond which a line's hand contact with the scene is taken as the plan's,
+#: not the IK's: the tracked poses miss the plan's by up to the tracking tolerance
+#: (:meth:`FetchIK.track`'s ``pos_tol``), so a shallower graze may come and go with the
+#: base; how little the depth varies between one plan's bases is measured in the
+#: README ("Manipulation tasks").
 LINE_HAND_DEPTH = 0.002
 #: Forward offset of the shoulder pan axis from the base centre [m] (fetch.xml).
 SHOULDER_FORWARD = 0.0326

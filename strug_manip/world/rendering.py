@@ -1,8 +1,9 @@
 """Offscreen renderers of many models on one OpenGL context.
 
-A :class:`mujoco.Renderer` creates an OpenGL context of its own, and the first render
-set-up in a fresh context (Mesa's software rasteriser compiles its pipeline per
-context) is most of a renderer's construction. An episode renders the head camera in
+A :class:`mujoco.Renderer` creates an OpenGL context of its own, and setting up MuJoCo's
+rendering (:class:`mujoco.MjrContext`) in a fresh context is several times slower
+than in one that has served before (Mesa's software rasteriser; README, "Manipulation
+tasks"): most of a renderer's construction. An episode renders the head camera in
 the world of every belief particle, each its own model, so it built a context per
 particle; a :class:`RenderContext` builds one and hands out renderers that share it.
 Each renderer still gets its own MuJoCo rendering context (:class:`mujoco.MjrContext`:
@@ -50,9 +51,10 @@ class RenderContext:
 
 class SharedRenderer(mujoco.Renderer):
     """A :class:`mujoco.Renderer` on a given OpenGL context instead of one of its own
-    (:meth:`RenderContext.renderer` makes them). Its set-up is the base class's; its
-    rendering is the base class's; :meth:`close` frees its MuJoCo context, not the
-    shared OpenGL one."""
+    (:meth:`RenderContext.renderer` makes them). Its set-up repeats the base class's on
+    that context; it renders with the base class's :meth:`render` after binding its
+    own framebuffer; :meth:`close` frees its MuJoCo context, not the shared OpenGL
+    one."""
 
     def __init__(self, model: mujoco.MjModel, height: int, width: int, gl) -> None:
         self._gl_context = None
