@@ -45,6 +45,8 @@ def test_the_report_counts_successes_causes_and_time(tmp_path: Path, capsys) -> 
     assert "failures by cause (2 of 3 episodes)" in out
     assert "1  dragged (strug 1)" in out and "1  nothing ran (strug 1)" in out
     assert "twin 60%, render 20%, likelihood 0%, real 20%" in out
+    # Three steps each, two, none and one of them a real skill.
+    assert "steps that ran nothing: 6 of 9 (strug 6 of 9)" in out
 
 
 def test_a_domain_that_is_no_manipulation_task_is_refused(tmp_path: Path) -> None:

@@ -26,9 +26,11 @@ the median episode wall time. Per domain, the failures by cause, counted per epi
   (``not_applicable`` steps, which run nothing, are left out);
 * ``nothing ran``: no real skill ran at all.
 
-Then where the time went (summed over the episodes: the twin, rendering predicted
-clouds, likelihoods, the full robot, perception, set-up) and the outcome cache's median
-hit rate.
+Then the steps that ran nothing (the chosen action could not start under any of the
+models the full robot plans in: ``not_applicable``; they spend the episode's steps and
+no cause above names them), where the time went (summed over the episodes: the twin,
+rendering predicted clouds, likelihoods, the full robot, perception, set-up) and the
+outcome cache's median hit rate.
 """
 
 from __future__ import annotations
@@ -60,6 +62,17 @@ def cause(record: dict) -> str:
     return f"out of steps after {real[-1]}" if real else "nothing ran"
 
 
+def idle_steps(records: list[dict]) -> str:
+    """How many of the episodes' steps ran no real skill, in all and per solver."""
+    idle: collections.Counter[str] = collections.Counter()
+    steps: collections.Counter[str] = collections.Counter()
+    for r in records:
+        idle[r["solver"]] += max(0, r["steps"] - len(r["report"].get("real", [])))
+        steps[r["solver"]] += r["steps"]
+    per = ", ".join(f"{s} {idle[s]} of {steps[s]}" for s in sorted(steps))
+    return f"steps that ran nothing: {sum(idle.values())} of {sum(steps.values())} ({per})"
+
+
 def report(records: list[dict]) -> str:
     """The text report of ``records`` (one domain or several)."""
     lines = [success_table(records)]
@@ -81,6 +94,7 @@ def report(records: list[dict]) -> str:
         for c, n in causes.most_common():
             who = {s: k for (c2, s), k in by.items() if c2 == c}
             lines.append(f"  {n:4d}  {c} ({', '.join(f'{s} {k}' for s, k in sorted(who.items()))})")
+        lines.append("  " + idle_steps(rs))
         total = {k: sum(r["report"]["time"].get(k, 0.0) for r in rs) for k in TIME_PARTS}
         t = sum(total.values()) or 1.0
         parts = ", ".join(f"{k} {v / t:.0%}" for k, v in total.items())
