@@ -99,6 +99,13 @@ HIDDEN_HINGE, MAX_HIDDEN = 0.03, 0.3
 HANDLE_CUE = 6.0
 #: Hinge sides, as :data:`perception.articulation_net.HINGE_SIDES`.
 SIDES = ("left", "right", "top", "bottom")
+#: A view's handle pixels (pull affordance > 0.5) read as a bar when they stretch at
+#: least this far along their longest direction [m] and this many times further than
+#: across it: the generator's bars are 8-20 cm long, its knobs 2-3.6 cm across, and the
+#: affordance spreads a few centimetres around a knob (4.7-6.5 cm in the worst views).
+BAR_MIN_LENGTH, BAR_MIN_ELONGATION = 0.05, 2.5
+#: Fewer handle pixels than this in a view say nothing of the handle's shape.
+MIN_HANDLE_PIXELS = 5
 #: Joint types of a fused part's class probabilities.
 TYPES = ("fixed", "prismatic", "revolute")
 
@@ -184,6 +191,9 @@ class PartHypothesis:
         door_rect: (4, 4) closed rectangle per side; door_q: (4,) opening per side [rad].
         q_drawer: opening as a drawer [m]; q_std: its spread [m].
         handle: (3,) front-frame grasp point, or None; handle_score: its affordance.
+        handle_style: ``bar`` or ``knob``, as the handle's seen shape says
+            (:func:`handle_shape`); handle_along: a bar's direction on the front,
+            ``y`` or ``z`` (None: a knob, or not seen).
         views: views it was seen in; visible: views that could see it; merged: views in
             which it was part of a larger merged region.
         shelf: a fixed part lying deep in its cell (an open shelf board, not a panel).
@@ -205,6 +215,8 @@ class PartHypothesis:
     merged: int
     shelf: bool
     readings: list[Reading] = field(default_factory=list, repr=False)
+    handle_style: str = "bar"
+    handle_along: str | None = None
 
     @property
     def joint_type(self) -> str:
@@ -563,6 +575,7 @@ def _summarise(
     )
     if handle is not None and all(r.closed_door for r in group):
         hinge = hinge * _handle_cue(handle, rect)
+    style, along = handle_shape([r.instance.handle_points for r in group], front)
     return PartHypothesis(
         rect=rect,
         rect_std=rects.std(axis=0),
@@ -580,7 +593,46 @@ def _summarise(
         merged=merged,
         shelf=float(np.median([r.depth_x for r in group])) < -0.04,
         readings=group,
+        handle_style=style,
+        handle_along=along,
     )
+
+
+def handle_shape(views: Sequence[np.ndarray], front: FrontFrame) -> tuple[str, str | None]:
+    """A handle's style and (a bar's) direction from its pixels in each view.
+
+    ``views``: per view, the (K, 3) world points whose pull affordance exceeds 0.5.
+    Each view with at least :data:`MIN_HANDLE_PIXELS` votes, weighted by its pixel
+    count: a bar if the points stretch :data:`BAR_MIN_LENGTH` along their principal
+    direction and :data:`BAR_MIN_ELONGATION` times their spread across it, else a knob.
+    The handle's shape stays as it is when its part turns or slides (a side door's bar
+    is vertical, a flap's horizontal, open or not), so the direction is read in the
+    front frame. No view with enough pixels: a bar, the generator's likelier style, its
+    direction left to the part's kind (None).
+
+    Returns:
+        (``"bar"`` or ``"knob"``, ``"y"``, ``"z"`` or None).
+    """
+    bar = knob = 0.0
+    along = np.zeros(2)  # votes for y, z
+    for pts in views:
+        if len(pts) < MIN_HANDLE_PIXELS:
+            continue
+        c = front.to_front(pts)
+        c = c - c.mean(axis=0)
+        _, _, vt = np.linalg.svd(c, full_matrices=False)
+        long = float(np.ptp(c @ vt[0]))
+        across = float(np.ptp(c @ vt[1]))
+        if long >= BAR_MIN_LENGTH and long >= BAR_MIN_ELONGATION * across:
+            bar += len(pts)
+            along[int(abs(vt[0][2]) > abs(vt[0][1]))] += len(pts)
+        else:
+            knob += len(pts)
+    if bar == knob == 0.0:
+        return "bar", None
+    if knob > bar:
+        return "knob", None
+    return "bar", "yz"[int(np.argmax(along))]
 
 
 def _candidates(r: Reading) -> list[np.ndarray]:
@@ -751,6 +803,8 @@ def _join_open_fragments(parts: list[PartHypothesis]) -> list[PartHypothesis]:
                                                                        b.visible)),
                     views=len({r.view for r in readings}),
                     handle=big.handle if big.handle is not None else small.handle,
+                    handle_style=(big if big.handle is not None else small).handle_style,
+                    handle_along=(big if big.handle is not None else small).handle_along,
                     readings=readings,
                 )  # fmt: skip
                 del out[j]

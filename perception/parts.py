@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import cv2
@@ -80,6 +80,8 @@ class Instance:
         pull: (N,) pull-affordance probability of each of ``points``.
         net_class_prob: (3,) the network's mean probability of fixed, prismatic,
             revolute over its pixels, renormalised over those three classes.
+        handle_points: (K, 3) world points of its pixels whose pull affordance exceeds
+            0.5 [m] (the handle's seen shape: fusion tells a bar from a knob by it).
     """
 
     mask: np.ndarray
@@ -91,6 +93,7 @@ class Instance:
     handle_score: float
     pull: np.ndarray
     net_class_prob: np.ndarray
+    handle_points: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
 
     @property
     def pixels(self) -> int:
@@ -262,6 +265,7 @@ def extract(view: View, out: np.ndarray, stride: int = 2, t0: float | None = Non
                 handle_score=score,
                 pull=handle[mv],
                 net_class_prob=cp / cp.sum(),
+                handle_points=pts[mv & (handle > 0.5)],
             )
         )
     normals = surface_normals(pts, T[:3, 3])

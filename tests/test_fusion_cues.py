@@ -18,6 +18,7 @@ from perception.fusion import (
     _apart,
     _associate,
     _weighted_median,
+    handle_shape,
     read_instance,
 )
 from perception.joint_cues import CUE_EVIDENCE, HandleSeen, closed_front_evidence
@@ -125,3 +126,24 @@ def test_affordance_grasps_take_a_bar_near_its_middle() -> None:
     assert np.allclose(T[:, :3, 0], [[-1.0, 0.0, 0.0]])  # into the front
     U, _ = sample_grasps(fused, 0, 50, np.random.default_rng(0), sharpness=0.0)
     assert np.abs(U[:, 1, 3]).max() > 0.1
+
+
+def test_the_handle_shape_tells_a_bar_from_a_knob() -> None:
+    """A view's handle pixels stretched along a line read as a bar in that direction, a
+    round blob as a knob; views vote by pixel count, and too few pixels say nothing."""
+    rng = np.random.default_rng(0)
+
+    def blob(long: float, across: float, along: int, n: int = 40) -> np.ndarray:
+        p = np.zeros((n, 3))
+        p[:, 0] = 0.03 + rng.uniform(-0.004, 0.004, n)  # standing out of the front
+        p[:, along] = rng.uniform(-long / 2, long / 2, n)
+        p[:, 3 - along] = rng.uniform(-across / 2, across / 2, n)
+        return p
+
+    bar_z, bar_y, knob = blob(0.14, 0.012, 2), blob(0.10, 0.015, 1), blob(0.035, 0.03, 1)
+    assert handle_shape([bar_z, bar_z[:20]], FRONT) == ("bar", "z")
+    assert handle_shape([bar_y], FRONT) == ("bar", "y")
+    assert handle_shape([knob, knob[:30]], FRONT) == ("knob", None)
+    assert handle_shape([bar_z[:10], knob], FRONT) == ("knob", None)  # 10 of 50 pixels
+    assert handle_shape([bar_z[:3]], FRONT) == ("bar", None)  # too few: the prior
+    assert handle_shape([], FRONT) == ("bar", None)

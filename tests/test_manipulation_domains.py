@@ -661,3 +661,33 @@ def test_the_real_handle_motion_is_measured_on_the_part_acted_on(drawer_episode)
             world.restore(s0.sim)
     finally:
         world.restore(s0.sim)
+
+
+def test_a_believed_knob_is_built_as_a_knob_and_grasped_pitched():
+    """A part perception saw with a knob gets a knob, its tip ``KNOB_TIP`` in front of
+    the grasp point, and the knob's grasps: pitched ones too, which a bar at the same
+    point does not offer (its pads would meet the front), and which a low drop-down
+    flap needs. A bar follows the direction seen; an unknown style is refused."""
+    from strug_manip.control import handle_grasps
+    from strug_manip.control.grasps import knob_end
+    from strug_manip.objects.assembly import KNOB_TIP, CabinetModel, PartModel, assemble
+
+    axis = np.array([0.0, -1.0, 0.0])
+    rect = (-0.25, 0.25, 0.30, 0.50)
+    seen = np.array([0.027, 0.0, 0.46])  # the knob's tip, as the camera sees it
+
+    def part(handle: str, along: str | None = None):
+        flap = PartModel("door", rect, axis, np.array([0.0, 0.0, 0.303]), "bottom", 1.4,
+                         handle=handle, handle_pos=seen, stay=1.5,
+                         handle_along=along)  # fmt: skip
+        spec, _ = assemble(CabinetModel(0.6, 0.6, 0.4, (flap,), _standing_front(0.6)))
+        return spec.movable_parts[0]
+
+    knob, bar = part("knob"), part("bar")
+    assert knob.handle == "knob" and np.allclose(knob.handle_axis, [1.0, 0.0, 0.0], atol=1e-6)
+    assert knob_end(knob) - knob.handle_pos[0] == pytest.approx(KNOB_TIP, abs=1e-9)
+    pitched = [g for g in handle_grasps(knob) if abs(g[2, 0]) > 0.1]
+    assert len(pitched) >= 2 and not [g for g in handle_grasps(bar) if abs(g[2, 0]) > 0.1]
+    assert abs(bar.handle_axis[1]) > 0.99 and abs(part("bar", "z").handle_axis[2]) > 0.99
+    with pytest.raises(ConfigError, match="handle"):
+        PartModel("door", rect, axis, np.zeros(3), "bottom", 1.4, handle="hook")

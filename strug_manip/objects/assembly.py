@@ -56,6 +56,14 @@ FRONT = 0.018
 GAP = 0.003
 #: Bar handle: radius, length, standoff from the front face [m].
 BAR = (0.0065, 0.12, 0.032)
+#: Knob: radius and the range of its length [m] (the generator's middle radius and its
+#: range of lengths), and how far its tip stands in front of the grasp point [m] (the
+#: generator's grasp point is 1 cm behind the tip).
+KNOB_RADIUS, KNOB_LENGTH, KNOB_TIP = 0.014, (0.020, 0.035), 0.01
+#: Unit vectors of the front frame's axes, by name.
+_AXES = {"y": np.array([0.0, 1.0, 0.0]), "z": np.array([0.0, 0.0, 1.0])}
+#: Handle styles a believed part may have.
+HANDLES = ("bar", "knob", "none")
 #: Wood density [kg/m^3] (generator: 450-700).
 DENSITY = 575.0
 #: Drawer box: height as a share of the front, depth as a share of the free cell depth,
@@ -95,8 +103,12 @@ class PartModel:
         hinge: door hinge side (:data:`SIDES`), else None.
         upper: joint limit [m or rad] (lower is 0).
         q: current joint position [m or rad].
-        handle: ``bar`` or ``none``; handle_pos: the grasp point (3,) [m] with the part
-            closed, or None for the default (the generator's spot).
+        handle: ``bar``, ``knob`` or ``none``; handle_pos: the grasp point (3,) [m]
+            with the part closed, or None for the default (the generator's spot);
+            handle_along: a bar's direction on the front, ``y`` or ``z`` (None: the
+            generator's for the part, vertical on a side door, else horizontal). A
+            knob stands out of the front face with its axis through the grasp point,
+            its tip :data:`KNOB_TIP` in front of it (as the generator grasps knobs).
         damping: [N s/m] or [N m s/rad]; friction: [N] or [N m].
         stay: a top- or bottom-hinged flap's friction stay, as the generator fits one
             (:data:`~strug_manip.objects.generator.FLAP_STAY_HOLD`): the joint's
@@ -120,6 +132,7 @@ class PartModel:
     damping: float = 0.0
     friction: float = 0.0
     stay: float | None = None
+    handle_along: str | None = None
 
     def __post_init__(self) -> None:
         if self.kind not in KINDS:
@@ -127,6 +140,12 @@ class PartModel:
         y0, y1, z0, z1 = (float(v) for v in self.rect)
         if not (y1 - y0 > 2 * GAP + 0.01 and z1 - z0 > 2 * GAP + 0.01):
             raise ConfigError(f"PartModel.rect must span at least 1 cm each way, got {self.rect}")
+        if self.handle not in HANDLES:
+            raise ConfigError(f"PartModel.handle must be one of {HANDLES}, got {self.handle!r}")
+        if self.handle_along not in (None, "y", "z"):
+            raise ConfigError(
+                f"PartModel.handle_along must be 'y', 'z' or None, got {self.handle_along!r}"
+            )
         if self.kind == "door" and self.hinge not in SIDES:
             raise ConfigError(f"a door needs hinge in {SIDES}, got {self.hinge!r}")
         if self.kind in ("drawer", "door") and not self.upper > 0:
@@ -266,6 +285,23 @@ def _bar(centre: np.ndarray, along: str) -> list[Geom]:
     return geoms
 
 
+def _knob(grasp: np.ndarray) -> tuple[list[Geom], np.ndarray]:
+    """A knob on the front face (front frame, the face at x = 0) whose tip stands
+    :data:`KNOB_TIP` in front of the seen grasp point ``grasp`` (its length clipped to
+    the generator's range), and the grasp point it has, (3,) [m] (front frame)."""
+    length = float(np.clip(grasp[0] + KNOB_TIP, *KNOB_LENGTH))
+    y, z = float(grasp[1]), float(grasp[2])
+    knob = Geom("handle_knob", "cylinder", (0.5 * length, y, z), (KNOB_RADIUS, length), "x",
+                "metal", _METAL_RGBA)  # fmt: skip
+    return [knob], np.array([max(length - KNOB_TIP, 0.5 * length), y, z])
+
+
+def _moved_by(geoms: list[Geom], shift: np.ndarray) -> list[Geom]:
+    """``geoms`` translated by ``shift`` (3,) [m] (front frame to a link frame)."""
+    return [dataclasses.replace(g, pos=tuple(float(v) for v in np.asarray(g.pos) + shift))
+            for g in geoms]  # fmt: skip
+
+
 def _part_geoms(
     p: PartModel, depth: float
 ) -> tuple[list[Geom], np.ndarray, np.ndarray, np.ndarray | None, tuple]:
@@ -316,10 +352,13 @@ def _part_geoms(
             else np.asarray(p.handle_pos, float)
         )
         if p.handle == "bar":
-            geoms += _bar(grasp - centre, "y")
+            geoms += _bar(grasp - centre, p.handle_along or "y")
+        elif p.handle == "knob":
+            knob, grasp = _knob(grasp)
+            geoms += _moved_by(knob, -centre)
         inner = np.array([bd - tb, bw - 2 * tb, bh - tb])
         ic = centre + np.array([xr + tb + 0.5 * inner[0], 0.0, zb + tb + 0.5 * inner[2]])
-        return geoms, centre, grasp, np.array([0.0, 1.0, 0.0]), (ic, inner)
+        return geoms, centre, grasp, _AXES[p.handle_along or "y"], (ic, inner)
     # A door: link frame on the hinge line, at the edge's middle.
     origin = np.asarray(p.origin, dtype=float)
     lo = np.array([-FRONT, y0 + GAP, z0 + GAP]) - origin
@@ -333,12 +372,15 @@ def _part_geoms(
         grasp = free + np.array([BAR[2] if p.handle == "bar" else 0.0, 0.0, 0.0])
     else:
         grasp = np.asarray(p.handle_pos, dtype=float)
-    along = "z" if side else "y"
+    along = p.handle_along or ("z" if side else "y")
     if p.handle == "bar":
         geoms += _bar(grasp - origin, along)
+    elif p.handle == "knob":
+        knob, grasp = _knob(grasp)
+        geoms += _moved_by(knob, -origin)
     inner = np.array([depth - FRONT, y1 - y0, z1 - z0])
     ic = np.array([-0.5 * (depth + FRONT), yc, zc])
-    return geoms, origin, grasp, np.array([0.0, 0.0, 1.0] if side else [0.0, 1.0, 0.0]), (ic, inner)
+    return geoms, origin, grasp, _AXES[along], (ic, inner)
 
 
 def assemble(

@@ -29,7 +29,9 @@ per part; defaults in :class:`BeliefConfig`):
   generator's smallest cell along its long side) is split in two with probability
   ``split_base`` plus ``split_merged`` times the share of views that saw it merged.
 
-Limits, damping and friction cannot be seen: they are drawn from the generator's
+A part's handle is the style its seen shape says (a bar or a knob,
+:func:`perception.fusion.handle_shape`; a bar along the direction seen) at the seen grasp
+point. Limits, damping and friction cannot be seen: they are drawn from the generator's
 documented ranges (:mod:`strug_manip.objects.generator`), limits never below the
 opening seen; a flap (a door hinged top or bottom) gets the generator's friction stay
 (:attr:`~strug_manip.objects.assembly.PartModel.stay`), so that it stays where it is
@@ -229,10 +231,11 @@ def _draw_part(
                     None,
                     upper,
                     q,
-                    "bar" if handle is not None else "none",
+                    h.handle_style if handle is not None else "none",
                     handle,
                     float(rng.uniform(*gen.DRAWER_DAMPING)),
                     float(rng.uniform(*gen.DRAWER_FRICTION)),
+                    handle_along=h.handle_along,
                 )
             )
         return out
@@ -273,11 +276,12 @@ def _draw_part(
             side,
             upper,
             q,
-            "bar" if handle is not None else "none",
+            h.handle_style if handle is not None else "none",
             handle,
             damping,
             friction,
             stay,
+            handle_along=h.handle_along,
         )
     ]
 
