@@ -604,7 +604,9 @@ def handle_shape(views: Sequence[np.ndarray], front: FrontFrame) -> tuple[str, s
     ``views``: per view, the (K, 3) world points whose pull affordance exceeds 0.5.
     Each view with at least :data:`MIN_HANDLE_PIXELS` votes, weighted by its pixel
     count: a bar if the points stretch :data:`BAR_MIN_LENGTH` along their principal
-    direction and :data:`BAR_MIN_ELONGATION` times their spread across it, else a knob.
+    direction on the front plane and :data:`BAR_MIN_ELONGATION` times their spread
+    across it there (how far the handle stands out is no part of its length), else a
+    knob.
     The handle's shape stays as it is when its part turns or slides (a side door's bar
     is vertical, a flap's horizontal, open or not), so the direction is read in the
     front frame. No view with enough pixels: a bar, the generator's likelier style, its
@@ -618,14 +620,14 @@ def handle_shape(views: Sequence[np.ndarray], front: FrontFrame) -> tuple[str, s
     for pts in views:
         if len(pts) < MIN_HANDLE_PIXELS:
             continue
-        c = front.to_front(pts)
+        c = front.to_front(pts)[:, 1:]  # on the front: a bar's standoff is not its length
         c = c - c.mean(axis=0)
         _, _, vt = np.linalg.svd(c, full_matrices=False)
         long = float(np.ptp(c @ vt[0]))
         across = float(np.ptp(c @ vt[1]))
         if long >= BAR_MIN_LENGTH and long >= BAR_MIN_ELONGATION * across:
             bar += len(pts)
-            along[int(abs(vt[0][2]) > abs(vt[0][1]))] += len(pts)
+            along[int(abs(vt[0][1]) > abs(vt[0][0]))] += len(pts)
         else:
             knob += len(pts)
     if bar == knob == 0.0:

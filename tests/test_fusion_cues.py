@@ -135,7 +135,7 @@ def test_the_handle_shape_tells_a_bar_from_a_knob() -> None:
 
     def blob(long: float, across: float, along: int, n: int = 40) -> np.ndarray:
         p = np.zeros((n, 3))
-        p[:, 0] = 0.03 + rng.uniform(-0.004, 0.004, n)  # standing out of the front
+        p[:, 0] = rng.uniform(0.0, 0.045, n)  # the face to the bar: posts and standoff
         p[:, along] = rng.uniform(-long / 2, long / 2, n)
         p[:, 3 - along] = rng.uniform(-across / 2, across / 2, n)
         return p

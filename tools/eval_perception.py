@@ -26,6 +26,9 @@ region:
   matched with the right type;
 * ``true_in_support``: per movable part, some particle has a part of its true type whose
   axis is within 10 deg and whose hinge line (doors) or origin (drawers) is within 5 cm;
+* ``handle_style``: per matched movable part with a handle, the fused hypothesis saw
+  a handle and read its style (bar or knob) right, and a bar's direction on the front
+  (:func:`perception.fusion.handle_shape`);
 * ``spurious_per_cabinet``: fused movable hypotheses (existence >= 0.5) that match no
   real movable part;
 * ``joint_type_unseen``: the part of ``joint_type`` over fronts whose type no view can
@@ -135,6 +138,8 @@ def true_parts(seed: int, T_world_cab: np.ndarray, fused: FusedCabinet | None) -
                 rect=rect,
                 axis=R @ p.axis,
                 origin=R @ p.origin + t,
+                handle=p.handle,
+                handle_axis=None if p.handle_axis is None else R @ p.handle_axis,
             )
         )
     return out
@@ -284,6 +289,7 @@ def evaluate_cabinet(
                 causes["not matched after fusion: no hypothesis there"] += 1
             continue
         used.add(k)
+        _count_handle(tp, fused.parts[k], fused.front, rec, causes)
         t, _, axis, origin = est[k]
         if t != tp["type"]:
             complete = False
@@ -348,6 +354,26 @@ def evaluate_cabinet(
     )
 
 
+def _count_handle(tp: dict, h, front, rec: Counter, causes: Counter) -> None:
+    """Count whether matched hypothesis ``h`` read true part ``tp``'s handle right."""
+    if tp["handle"] == "none":
+        return
+    rec["handle_n"] += 1
+    if h.handle is None:
+        causes["handle: not seen"] += 1
+        return
+    along = None
+    if tp["handle"] == "bar":
+        d = front.T_world_front[:3, :3].T @ tp["handle_axis"]
+        along = "z" if abs(d[2]) > abs(d[1]) else "y"
+    if h.handle_style != tp["handle"]:
+        causes[f"handle: {tp['handle']} read as {h.handle_style}"] += 1
+    elif along is not None and h.handle_along not in (None, along):
+        causes["handle: bar read along the wrong direction"] += 1
+    else:
+        rec["handle_ok"] += 1
+
+
 def summarise(results: list[dict]) -> tuple[dict, dict[str, int]]:
     """The JSON object of the issue's acceptance, and the failure causes (per part)."""
     rec = sum((r["rec"] for r in results), Counter())
@@ -368,6 +394,7 @@ def summarise(results: list[dict]) -> tuple[dict, dict[str, int]]:
             "n": sum(r["support"][0] for r in results),
             "ok": sum(r["support"][1] for r in results),
         },
+        "handle_style": {"n": rec["handle_n"], "ok": rec["handle_ok"]},
         "spurious_per_cabinet": float(np.mean([r["spurious"] for r in results])),
         "seconds_per_view": float(np.mean([s for r in results for s in r["seconds"]])),
         "seconds_fusion": float(np.mean([r["fusion"] for r in results])),
@@ -428,6 +455,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"hinge error median [m]:  {out['hinge_error_m_median']:.4f}")
     print(f"cabinets complete after fusion: {pct(out['cabinets_complete'])}")
     print(f"true model in the belief's support (per part): {pct(out['true_in_support'])}")
+    print(f"handle style right (matched parts with a handle): {pct(out['handle_style'])}")
     print(f"spurious movable hypotheses per cabinet: {out['spurious_per_cabinet']:.2f}")
     total = args.views * out["seconds_per_view"] + out["seconds_fusion"]
     print(
