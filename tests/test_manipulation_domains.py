@@ -691,3 +691,26 @@ def test_a_believed_knob_is_built_as_a_knob_and_grasped_pitched():
     assert abs(bar.handle_axis[1]) > 0.99 and abs(part("bar", "z").handle_axis[2]) > 0.99
     with pytest.raises(ConfigError, match="handle"):
         PartModel("door", rect, axis, np.zeros(3), "bottom", 1.4, handle="hook")
+
+
+def test_an_action_without_a_motion_plan_twice_in_a_row_is_refused():
+    """``no_motion_plan`` is tried again (another planner seed) but not a third time;
+    a collision never refuses; a step that ends ok lifts every refusal."""
+    from strug_manip.domains.manipulation.model import NO_PLAN_TRIES, RealEpisode
+
+    assert NO_PLAN_TRIES == 2
+    real = RealEpisode(None, 0, "link_1", np.zeros(3), [], [])
+    place, pick = (ManipAction("Place", 0), -1), (ManipAction("Pick", grasp="top"), -1)
+    real.settle(place, "no_motion_plan")
+    assert not real.refused
+    real.settle(pick, "collision")
+    real.settle(pick, "collision")
+    assert not real.refused
+    real.settle(place, "no_motion_plan")
+    assert real.refused == {place}
+    real.settle(pick, "grasp_lost")
+    assert real.refused == {place, pick}
+    real.settle(pick, "ok")
+    assert not real.refused and not real.unplanned
+    real.settle(place, "no_motion_plan")
+    assert not real.refused  # counted afresh after the ok

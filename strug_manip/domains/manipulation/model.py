@@ -34,6 +34,7 @@ likelihood.
 
 from __future__ import annotations
 
+import collections
 import functools
 import math
 import time
@@ -125,6 +126,13 @@ REPEATS_ITSELF = (*CANNOT_START, str(Status.GRASP_LOST), str(Status.CABINET_MOVE
 #: placed the object would otherwise lose to those without the target part (their
 #: twins could not start either), and an episode gave up on the right model.
 BEFORE_MOTION = (*CANNOT_START, str(Status.NO_MOTION_PLAN))
+#: A ``no_motion_plan`` stop of one action (with the particle it follows) this many
+#: times in a row since the last step that ended ``ok`` refuses it as
+#: :data:`REPEATS_ITSELF` would: the robot did not move, so the next try plans the same
+#: motion from the same state with another planner seed, and where two seeds found no
+#: path in the planner's budget a third rarely does (a held-out door episode spent seven
+#: steps on one ``Place`` that way).
+NO_PLAN_TRIES = 2
 #: Their status codes, as observation keys carry them.
 BEFORE_MOTION_CODES = frozenset(STATUS_CODES[x] for x in BEFORE_MOTION)
 #: The real robot plans an opening or a probe in at most this many models before it
@@ -169,11 +177,15 @@ class RealEpisode:
         weighed: the cabinet's joints (to the mm, as bytes) when the belief last
             weighed a cloud (``ManipObservation.news``); empty before the first.
         refused: the actions that failed on the full robot in a way that repeats
-            itself (:data:`REPEATS_ITSELF`) since its last step that ended ``ok``, each
+            itself (:data:`REPEATS_ITSELF`, or ``no_motion_plan``
+            :data:`NO_PLAN_TRIES` times in a row) since its last step that ended
+            ``ok``, each
             with the particle it followed
             (:meth:`ManipulationPOMDP._rep`); :meth:`ManipulationPOMDP.applicable`
             refuses them at the root while that particle is still their
             representative.
+        unplanned: per such (action, particle), its ``no_motion_plan`` stops since the
+            last step that ended ``ok``.
         now: the step count of the states after the last real step (the root's).
         still: the last real step stopped before anything moved (:data:`BEFORE_MOTION`).
         handles: the true cabinet's graspable parts' handles where they were when the
@@ -190,9 +202,25 @@ class RealEpisode:
     labels: list[str] = field(default_factory=list)
     weighed: bytes = b""
     refused: set[tuple[ManipAction, int]] = field(default_factory=set)
+    unplanned: collections.Counter = field(default_factory=collections.Counter)
     now: int = 0
     still: bool = False
     handles: dict[str, np.ndarray] = field(default_factory=dict)
+
+    def settle(self, key: tuple[ManipAction, int], status: str) -> None:
+        """The refusals after a real step of ``key`` (action, the particle it
+        followed) that ended ``status``: all lifted by ``ok``; ``key`` refused after a
+        failure that repeats itself (:data:`REPEATS_ITSELF`) or after
+        :data:`NO_PLAN_TRIES` ``no_motion_plan`` stops in a row."""
+        if status == str(Status.OK):
+            self.refused.clear()
+            self.unplanned.clear()
+        elif status in REPEATS_ITSELF:
+            self.refused.add(key)
+        elif status == str(Status.NO_MOTION_PLAN):
+            self.unplanned[key] += 1
+            if self.unplanned[key] >= NO_PLAN_TRIES:
+                self.refused.add(key)
 
 
 class ManipulationPOMDP(GenerativePOMDP):
@@ -495,8 +523,9 @@ class ManipulationPOMDP(GenerativePOMDP):
           learns that the model is wrong.
 
         At the root (the states of the current real step), an action that failed on
-        the full robot in a way that repeats itself (:data:`REPEATS_ITSELF`) since the
-        last step that ended ``ok`` is refused whatever the twins say, as long as it
+        the full robot in a way that repeats itself (:data:`REPEATS_ITSELF`, or
+        :data:`NO_PLAN_TRIES` stops without a motion plan; :meth:`RealEpisode.settle`)
+        since the last step that ended ``ok`` is refused whatever the twins say, as long as it
         would follow the same particle's grasp and joint: the robot would plan it
         against the same model in nearly the same state and fail the same way again.
         The twins and the full robot disagree on such actions, and when every weighted
@@ -880,10 +909,7 @@ class ManipulationPOMDP(GenerativePOMDP):
             reward = self._reward(world.scene.cabinet_spec, real.target, world, out)
         # Such a failure repeats itself until something changes: the plan is made
         # against the same model, in nearly the same state (applicable()).
-        if status == str(Status.OK):
-            real.refused.clear()
-        elif status in REPEATS_ITSELF:
-            real.refused.add((a, self._rep(a)))
+        real.settle((a, self._rep(a)), status)
         real.now = s.t + 1
         real.still = status in BEFORE_MOTION
         frame = take_views(world, 1)[0]
