@@ -797,6 +797,7 @@ def _join_open_fragments(parts: list[PartHypothesis]) -> list[PartHypothesis]:
                                  min(ra[2], rb[2]), max(ra[3], rb[3])])  # fmt: skip
                 big, small = (a, b) if a.views * a.existence >= b.views * b.existence else (b, a)
                 readings = big.readings + small.readings
+                seen = big if big.handle is not None else small  # whose handle it keeps
                 out[i] = dataclasses.replace(
                     big,
                     rect=rect,
@@ -804,9 +805,9 @@ def _join_open_fragments(parts: list[PartHypothesis]) -> list[PartHypothesis]:
                     existence=max(a.existence, b.existence, _existence(readings, a.visible,
                                                                        b.visible)),
                     views=len({r.view for r in readings}),
-                    handle=big.handle if big.handle is not None else small.handle,
-                    handle_style=(big if big.handle is not None else small).handle_style,
-                    handle_along=(big if big.handle is not None else small).handle_along,
+                    handle=seen.handle,
+                    handle_style=seen.handle_style,
+                    handle_along=seen.handle_along,
                     readings=readings,
                 )  # fmt: skip
                 del out[j]

@@ -36,6 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from planners.errors import ConfigError
+from strug_manip.objects import generator as gen
 from strug_manip.objects.generator import (
     METAL_DENSITY,
     SEMANTICS,
@@ -56,14 +57,14 @@ FRONT = 0.018
 GAP = 0.003
 #: Bar handle: radius, length, standoff from the front face [m].
 BAR = (0.0065, 0.12, 0.032)
-#: Knob: radius and the range of its length [m] (the generator's middle radius and its
-#: range of lengths), and how far its tip stands in front of the grasp point [m] (the
-#: generator's grasp point is 1 cm behind the tip).
-KNOB_RADIUS, KNOB_LENGTH, KNOB_TIP = 0.014, (0.020, 0.035), 0.01
+#: Knob: the generator's middle radius [m], and how far its tip stands in front of the
+#: grasp point [m] (the generator's grasp point is 1 cm behind the tip); its length is
+#: kept within the generator's range (:data:`generator.KNOB_LENGTH`).
+KNOB_RADIUS, KNOB_TIP = 0.5 * sum(gen.KNOB_RADIUS), 0.01
 #: Unit vectors of the front frame's axes, by name.
 _AXES = {"y": np.array([0.0, 1.0, 0.0]), "z": np.array([0.0, 0.0, 1.0])}
-#: Handle styles a believed part may have.
-HANDLES = ("bar", "knob", "none")
+#: Handle styles a believed part may have (the generator's).
+HANDLES = gen.HANDLE_KINDS
 #: Wood density [kg/m^3] (generator: 450-700).
 DENSITY = 575.0
 #: Drawer box: height as a share of the front, depth as a share of the free cell depth,
@@ -289,7 +290,7 @@ def _knob(grasp: np.ndarray) -> tuple[list[Geom], np.ndarray]:
     """A knob on the front face (front frame, the face at x = 0) whose tip stands
     :data:`KNOB_TIP` in front of the seen grasp point ``grasp`` (its length clipped to
     the generator's range), and the grasp point it has, (3,) [m] (front frame)."""
-    length = float(np.clip(grasp[0] + KNOB_TIP, *KNOB_LENGTH))
+    length = float(np.clip(grasp[0] + KNOB_TIP, *gen.KNOB_LENGTH))
     y, z = float(grasp[1]), float(grasp[2])
     knob = Geom("handle_knob", "cylinder", (0.5 * length, y, z), (KNOB_RADIUS, length), "x",
                 "metal", _METAL_RGBA)  # fmt: skip
