@@ -73,7 +73,7 @@ def test_rgbd_frame_shapes_and_ranges(world) -> None:
 def test_worlds_rendering_on_one_shared_context_render_what_their_own_would() -> None:
     """Two worlds of different cabinets on one RenderContext, rendered by turns: each
     frame (colour, depth, segmentation) equals its world's render on a context of its
-    own; closing the context frees the renderers, and a new render makes a new one."""
+    own, from a framebuffer of the image's size; closing the context frees the renderers, and a new render makes a new one."""
     from strug_manip.world.rendering import RenderContext
 
     shared = RenderContext()
@@ -88,6 +88,10 @@ def test_worlds_rendering_on_one_shared_context_render_what_their_own_would() ->
                 a, b = w.render(), ref.render()
                 for x, y in ((a.rgb, b.rgb), (a.depth, b.depth), (a.segmentation, b.segmentation)):
                     np.testing.assert_array_equal(x, y)
+        # Its framebuffer is its image, the model's (sized for pictures) left as it was.
+        ctx, c = worlds[0]._renderer._mjr_context, worlds[0].config
+        assert (ctx.offWidth, ctx.offHeight) == (c.width, c.height)
+        assert worlds[0].model.vis.global_.offwidth == max(c.width, 1280)
         shared.close()
         assert worlds[0]._renderer._mjr_context is None  # freed with the context
         worlds[0]._renderer = None

@@ -164,7 +164,8 @@ def _rotation_angle(R: np.ndarray) -> float:
     """Angle [rad] of a rotation matrix (3, 3), accurate near 0."""
     quat = np.empty(4)
     mujoco.mju_mat2Quat(quat, np.ascontiguousarray(R, dtype=float).reshape(9))
-    return 2.0 * math.atan2(float(np.linalg.norm(quat[1:])), abs(float(quat[0])))
+    v = quat[1:]
+    return 2.0 * math.atan2(math.sqrt(v.dot(v)), abs(float(quat[0])))  # = np.linalg.norm
 
 
 #: What DAQP takes for an absent bound (qpsolvers' convention).
@@ -364,6 +365,7 @@ class FetchIK:
             self.posture = self._check_q("posture", posture)
         for j, v in self.posture.items():
             self._q_default[self._qadr[j]] = v
+        self._clip: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         self._clip_into_limits(self._q_default)
 
         self._config = mink.Configuration(model, self._q_default)
@@ -430,23 +432,29 @@ class FetchIK:
     def _clip_into_limits(self, q: np.ndarray) -> None:
         """Clip every limited hinge/slide joint of qpos ``q`` (nq,) into its range, at
         least :data:`LIMIT_MARGIN` inside it (where the limit constraint is satisfied)."""
-        m = self.model
-        for jid in range(m.njnt):
-            if m.jnt_limited[jid] and int(m.jnt_type[jid]) in (
-                int(mujoco.mjtJoint.mjJNT_HINGE),
-                int(mujoco.mjtJoint.mjJNT_SLIDE),
-            ):
-                a = m.jnt_qposadr[jid]
-                lo, hi = m.jnt_range[jid]
-                margin = min(LIMIT_MARGIN, 0.25 * (hi - lo))
-                q[a] = min(max(q[a], lo + margin), hi - margin)
+        if self._clip is None:  # the limited joints, once (a loop over them per call
+            m = self.model  # was a tenth of a placement search)
+            adr, lows, highs = [], [], []
+            for jid in range(m.njnt):
+                if m.jnt_limited[jid] and int(m.jnt_type[jid]) in (
+                    int(mujoco.mjtJoint.mjJNT_HINGE),
+                    int(mujoco.mjtJoint.mjJNT_SLIDE),
+                ):
+                    lo, hi = m.jnt_range[jid]
+                    margin = min(LIMIT_MARGIN, 0.25 * (hi - lo))
+                    adr.append(int(m.jnt_qposadr[jid]))
+                    lows.append(lo + margin)
+                    highs.append(hi - margin)
+            self._clip = (np.array(adr, dtype=int), np.array(lows), np.array(highs))
+        adr, lows, highs = self._clip
+        q[adr] = np.minimum(np.maximum(q[adr], lows), highs)
 
     def _errors(self, p_goal: np.ndarray, R_goal: np.ndarray) -> tuple[float, float]:
         """(position error [m], rotation error [rad]) of the gripper at the current q."""
         d = self._config.data
-        p = d.site_xpos[self._site]
+        e = p_goal - d.site_xpos[self._site]
         R = d.site_xmat[self._site].reshape(3, 3)
-        return float(np.linalg.norm(p_goal - p)), _rotation_angle(R_goal.T @ R)
+        return math.sqrt(e.dot(e)), _rotation_angle(R_goal.T @ R)  # |e| as np.linalg.norm
 
     def _clearance(self) -> float:
         """Smallest distance [m] between the geoms of the collision pairs at the current

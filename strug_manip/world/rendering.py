@@ -70,7 +70,17 @@ class SharedRenderer(mujoco.Renderer):
         self._scene_option = mujoco.MjvOption()
         self._rect = mujoco.MjrRect(0, 0, width, height)
         gl.make_current()
-        self._mjr_context = mujoco.MjrContext(model, mujoco.mjtFontScale.mjFONTSCALE_150.value)
+        # The offscreen framebuffer is this renderer's image, not the model's largest
+        # (sized for pictures): most of a context's set-up is allocating that buffer
+        # with its multisamples, and only the image's corner of it is ever drawn.
+        size = g.offwidth, g.offheight
+        g.offwidth, g.offheight = width, height
+        try:
+            self._mjr_context = mujoco.MjrContext(
+                model, mujoco.mjtFontScale.mjFONTSCALE_150.value
+            )
+        finally:
+            g.offwidth, g.offheight = size
         mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN.value, self._mjr_context)
         self._mjr_context.readDepthMap = mujoco.mjtDepthMap.mjDEPTH_ZEROFAR
         self._depth_rendering = False
