@@ -187,3 +187,34 @@ def test_leaving_out_the_scenes_own_contacts_changes_no_answer(world, checker, i
     assert 20 < seen_hits < 110  # both answers were asked for
     checker.attach(None)
     world.reset()
+
+
+def test_a_held_object_kept_clear_counts_its_contacts_from_that_distance(checker, ik) -> None:
+    """``keep_clear(d)``: the attached object 1 cm short of the drawer's front (beside
+    the handle) touches nothing, yet counts with 2 cm to keep; 0 and detaching give the
+    plain check back."""
+    hand = arm_at(ik, (0.75, 0.15, 1.06))
+    T_go = np.eye(4)
+    reach = next(  # how far ahead of the TCP the object first meets the front [m]
+        x for x in np.arange(0.0, 0.4, 0.002)
+        if (T_go.__setitem__((0, 3), x), checker.attach("object", T_go), checker.allow(),
+            not checker.free(hand))[-1]
+    )  # fmt: skip
+    T_go[0, 3] = reach - 0.01
+    checker.attach("object", T_go)
+    checker.allow()
+    assert checker.free(hand)
+    checker.keep_clear(0.02)
+    assert not checker.free(hand)
+    assert any("object" in h and "cabinet" in h for h in checker.contacts(hand))
+    checker.keep_clear(0.0)
+    assert checker.free(hand)
+    checker.keep_clear(0.02)
+    checker.attach(None)
+    with pytest.raises(ConfigError, match="attached"):
+        checker.keep_clear(0.02)
+    checker.attach("object", T_go)
+    checker.allow()
+    assert checker.free(hand)  # detaching reset the distance
+    with pytest.raises(ConfigError, match="distance"):
+        checker.keep_clear(-0.01)

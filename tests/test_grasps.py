@@ -29,10 +29,11 @@ from strug_manip.control.grasps import (
     knob_end,
     max_back_off,
 )
-from strug_manip.control.targets import FINGER_SPAN
+from strug_manip.control.targets import CLEARANCE, FINGER_SPAN, HELD_HEIGHT
 from strug_manip.domains.manipulation.rules import DRAG_LIMIT, dragged, inside, open_enough
 from strug_manip.objects.generator import axis_angle, generate_cabinet
 from strug_manip.objects.hypotheses import check_pose
+from strug_manip.world.scene import OBJECT_HALF_SIZE
 
 FRONT = np.array([1.0, 0.0, 0.0])
 
@@ -157,6 +158,13 @@ def test_place_targets_are_inside_and_open_enough_is_the_targets_rule(cabinets) 
     t = place_target(door, "link_5", 1.4, T)
     assert t.grasp == "side" and t.lift >= 0.0
     assert inside(door, "link_5", 1.4, T, t.p)
+    # Carried in midway up the opening: the palm as far under the cell's top as the
+    # object's bottom over its floor (a side door swung open leaves the full height).
+    cell = door.part("link_5")
+    top = cell.interior_center[2] + cell.interior_size[2] / 2
+    bottom = t.p[2, 3] - OBJECT_HALF_SIZE[2]  # where it rests (the cell's floor)
+    palm = bottom + t.lift + HELD_HEIGHT
+    assert top - palm == pytest.approx(t.lift, abs=1e-9) and t.lift > CLEARANCE
     with pytest.raises(ConfigError, match="cell link_5 leaves"):
         place_target(door, "link_5", 0.1, T)
     with pytest.raises(UnknownNameError):

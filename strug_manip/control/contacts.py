@@ -88,6 +88,8 @@ class ContactChecker:
         )
         self.robot = np.array([b != 0 and int(m.body_rootid[b]) == root for b in range(m.nbody)])
         self.model = m = copy.copy(model)  # its collision bits become the checker's own
+        self._margin0 = np.asarray(m.geom_margin).copy()
+        self._body_margin0 = np.asarray(m.body_margin).copy()
         self.geom_body = np.asarray(m.geom_bodyid).copy()
         self._env_bits = _checker_bits(m, self.robot[self.geom_body])
         self.hand = np.array([self.body_id(b) for b in HAND_BODIES])
@@ -191,11 +193,28 @@ class ContactChecker:
         m.geom_conaffinity[geoms] = ENV_BIT | ROBOT_BIT
         self._counts[bid] = True
 
+    def keep_clear(self, distance: float) -> None:
+        """Count the attached body's contacts from ``distance`` [m] apart (0: touching,
+        the default): its geoms' MuJoCo margin, which the narrow phase honours for box,
+        plane, sphere and capsule pairs (the cabinet's boards), not for the general
+        convex ones (cylinder handles, meshes: those count from touching). Detaching
+        resets it. Raises :class:`ConfigError` when nothing is attached."""
+        if self._attached is None:
+            raise ConfigError("keep_clear needs an attached body (attach one first)")
+        if not (math.isfinite(distance) and distance >= 0.0):
+            raise ConfigError(f"distance must be a finite length >= 0 [m], got {distance!r}")
+        bid = self._attached[0]
+        self.model.geom_margin[self.geom_body == bid] = distance
+        # The broad phase bounds each body by its largest geom margin, set at compile time.
+        self.model.body_margin[bid] = max(distance, float(self._body_margin0[bid]))
+
     def _detach(self) -> None:
         if self._attached is None:
             return
         bid = self._attached[0]
         geoms = self.geom_body == bid
+        self.model.geom_margin[geoms] = self._margin0[geoms]
+        self.model.body_margin[bid] = self._body_margin0[bid]
         self.model.geom_contype[geoms] = self._env_bits[geoms, 0]
         self.model.geom_conaffinity[geoms] = self._env_bits[geoms, 1]
         self._counts[bid] = self.robot[bid]

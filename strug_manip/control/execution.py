@@ -43,7 +43,7 @@ from strug_manip.control.contacts import ContactChecker
 from strug_manip.control.context import ControlContext
 from strug_manip.control.driver import JointDriver
 from strug_manip.control.grasps import held_grasp
-from strug_manip.control.motion import NO_PLAN, ArmValidity, escape_start
+from strug_manip.control.motion import NO_PLAN, ArmValidity, MotionPlan, escape_start
 from strug_manip.control.navigation import plan_route
 from strug_manip.control.outcome import Outcome, SkillStop, Status
 from strug_manip.control.params import DEFAULT_PARAMS, SkillParams
@@ -422,7 +422,10 @@ class FullRobot:
             bounds = (planners[0].lower, planners[0].upper)
             lead = escape_start(q_from, validity, rng, bounds)
         q_from = q_from if lead is None else lead
-        for i, planner in enumerate(planners):
+        plan = None
+        if carrying is not None:
+            plan = self._clear_plan(checker, validity, q_from, q_to, len(planners))
+        for i, planner in enumerate(planners if plan is None else ()):
             plan = planner.plan(
                 dict(zip(ARM_TORSO_JOINTS, q_from.tolist(), strict=True)),
                 dict(zip(ARM_TORSO_JOINTS, q_to.tolist(), strict=True)),
@@ -437,6 +440,33 @@ class FullRobot:
         if not plan.success:
             raise SkillStop(Status.NO_MOTION_PLAN, f"{plan.reason}: {plan.detail}", phase)
         return plan.waypoints[1:] if lead is None else plan.waypoints
+
+    def _clear_plan(
+        self,
+        checker: ContactChecker,
+        validity: ArmValidity,
+        q_from: np.ndarray,
+        q_to: np.ndarray,
+        n: int,
+    ) -> MotionPlan | None:
+        """The first planner's plan from ``q_from`` to ``q_to`` (torso + arm, (8,)) that
+        keeps the carried object ``held_clearance`` from everything but the hand; None
+        where its start or goal is nearer than that, or that planner finds none."""
+        checker.keep_clear(self.params.held_clearance)
+        try:
+            if not (validity.free(q_from) and validity.free(q_to)):
+                return None
+            plan = self.ctx.planners(self.plan_world.model)[0].plan(
+                dict(zip(ARM_TORSO_JOINTS, q_from.tolist(), strict=True)),
+                dict(zip(ARM_TORSO_JOINTS, q_to.tolist(), strict=True)),
+                validity,
+                timeout=self.params.planner_timeout(0, n),
+                seed=self.seed + self.n_plans,
+            )
+            self.n_plans += 1
+            return plan if plan.success else None
+        finally:
+            checker.keep_clear(0.0)
 
     def _route(self, target: np.ndarray, arm: np.ndarray, carrying) -> list[np.ndarray]:
         """Base poses to drive through to ``target`` with the arm at ``arm`` (its drive

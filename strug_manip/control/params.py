@@ -80,6 +80,15 @@ class SkillParams:
             well under a centimetre at probe speed.
         free_tolerance: the same for free motions [m]: there a fast arm lags a few
             centimetres behind its command, and only a blocked one falls far behind.
+        held_clearance: a free motion carrying the object keeps it this far from
+            everything but the hand where it can [m]: the motion is planned in the
+            believed cabinet, whose boards perception puts a centimetre or two off,
+            and the arm lags its command on the way; a carried object whose end
+            grazed a board's front edge turned 14 degrees in the grasp, and the
+            Place that followed caught the cell's floor and slid the cabinet. Where
+            the start or the goal is nearer than this (an object just lifted, a pre-place
+            beside an open door), or the first planner finds no such path, the
+            motion is planned as before, touching nothing.
         cabinet_motion_limit: the cabinet's base more than this from where it stood
             when the skill started (horizontally) stops the skill (status
             ``cabinet_moved``) [m]: a part that does not move the way the robot
@@ -129,6 +138,7 @@ class SkillParams:
     tracking_tolerance: float = 0.08
     probe_tolerance: float = 0.02
     free_tolerance: float = 0.2
+    held_clearance: float = 0.02
     cabinet_motion_limit: float = 0.03
     time_budget: float = 60.0
     plan_timeout: float = 4.0

@@ -12,9 +12,9 @@ the first):
   object lies along the pull (fingers across the box) where that fits, else across it.
 - a **cell** (behind an open door, or an open shelf): carried in level from the front
   (``side`` grasp), resting on the cell's floor :data:`INSERT` behind the front; it
-  comes in from as high above its place as the cell's opening leaves room for (up to
-  :data:`MAX_LIFT`), over the cell's front edge and an open drop-down flap (whose
-  edge it must clear: a flap opened too little leaves no way in).
+  comes in midway up the cell's free opening (up to :data:`MAX_LIFT` above its place),
+  over the cell's front edge, and over an open drop-down flap (whose edge it must
+  clear: a flap opened too little leaves no way in).
 
 Poses are ``T_world_object`` of the object's box (its x: the 0.10 m side, y: the
 0.06 m side the fingers close across, z up). Raises :class:`~planners.errors.ConfigError`
@@ -81,9 +81,10 @@ def _cell_place(
     The object goes :data:`INSERT` behind the front, across the cell's width in the
     middle of the part of the opening an open door leaves free (a side door at angle
     ``q`` still covers ``w cos q + t sin q`` of it next to its hinge; a top flap hangs
-    ``h cos q + t`` down into it), resting on the floor. It comes in from as high as the
-    free height allows (up to :data:`MAX_LIFT`: over the front edge), except under a
-    top flap; behind a drop-down flap it comes in pitched down by :data:`FLAP_PITCH`
+    ``h cos q + t`` down into it), resting on the floor. It comes in level midway up
+    the free height (the hand as far from the top as the object from the floor's front
+    edge, up to :data:`MAX_LIFT`), except under a top flap; behind a drop-down flap it
+    comes in pitched down by :data:`FLAP_PITCH`
     (the wrist and forearm, out over the open flap, ride higher), :data:`CLEARANCE`
     over the flap's edge and no higher (the pitched hand's wrist rises behind the
     object and meets the cell's top edge when it comes in higher), and is let go
@@ -134,7 +135,10 @@ def _cell_place(
             f"object carried in at most {highest + drop:.3f} m high does not pass over it"
         )
     # Behind a drop-down flap, just over its edge: higher, the pitched wrist meets the top.
-    lift = max(edge + CLEARANCE - drop, 0.0) if pitch else highest
+    # Level: midway between the floor's front edge and the top (the cell's believed
+    # floor and top are each perception's, centimetres off; hugging the top left 1 cm).
+    middle = float(np.clip(0.5 * (height - held), 0.0, MAX_LIFT))
+    lift = max(edge + CLEARANCE - drop, 0.0) if pitch else min(highest, middle)
     center = np.array([front - INSERT, 0.5 * (y_lo + y_hi), floor + half[2] + drop])
     return center, lift, pitch
 
