@@ -73,7 +73,8 @@ def test_rgbd_frame_shapes_and_ranges(world) -> None:
 def test_worlds_rendering_on_one_shared_context_render_what_their_own_would() -> None:
     """Two worlds of different cabinets on one RenderContext, rendered by turns: each
     frame (colour, depth, segmentation) equals its world's render on a context of its
-    own, from a framebuffer of the image's size; closing the context frees the renderers, and a new render makes a new one."""
+    own, from a framebuffer of the image's size; closing the context frees the
+    renderers, and a new render makes a new one."""
     from strug_manip.world.rendering import RenderContext
 
     shared = RenderContext()

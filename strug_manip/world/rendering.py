@@ -76,9 +76,7 @@ class SharedRenderer(mujoco.Renderer):
         size = g.offwidth, g.offheight
         g.offwidth, g.offheight = width, height
         try:
-            self._mjr_context = mujoco.MjrContext(
-                model, mujoco.mjtFontScale.mjFONTSCALE_150.value
-            )
+            self._mjr_context = mujoco.MjrContext(model, mujoco.mjtFontScale.mjFONTSCALE_150.value)
         finally:
             g.offwidth, g.offheight = size
         mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN.value, self._mjr_context)
