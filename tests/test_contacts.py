@@ -195,11 +195,12 @@ def test_a_held_object_kept_clear_counts_its_contacts_from_that_distance(checker
     plain check back."""
     hand = arm_at(ik, (0.75, 0.15, 1.06))
     T_go = np.eye(4)
-    reach = next(  # how far ahead of the TCP the object first meets the front [m]
-        x for x in np.arange(0.0, 0.4, 0.002)
-        if (T_go.__setitem__((0, 3), x), checker.attach("object", T_go), checker.allow(),
-            not checker.free(hand))[-1]
-    )  # fmt: skip
+    for reach in np.arange(0.0, 0.4, 0.002):  # the object ahead of the TCP meets the front
+        T_go[0, 3] = reach
+        checker.attach("object", T_go)
+        checker.allow()
+        if not checker.free(hand):
+            break
     T_go[0, 3] = reach - 0.01
     checker.attach("object", T_go)
     checker.allow()

@@ -43,7 +43,13 @@ from strug_manip.control.contacts import ContactChecker
 from strug_manip.control.context import ControlContext
 from strug_manip.control.driver import JointDriver
 from strug_manip.control.grasps import held_grasp
-from strug_manip.control.motion import NO_PLAN, ArmValidity, MotionPlan, escape_start
+from strug_manip.control.motion import (
+    NO_PLAN,
+    ArmMotionPlanner,
+    ArmValidity,
+    MotionPlan,
+    escape_start,
+)
 from strug_manip.control.navigation import plan_route
 from strug_manip.control.outcome import Outcome, SkillStop, Status
 from strug_manip.control.params import DEFAULT_PARAMS, SkillParams
@@ -426,14 +432,7 @@ class FullRobot:
         if carrying is not None:
             plan = self._clear_plan(checker, validity, q_from, q_to, len(planners))
         for i, planner in enumerate(planners if plan is None else ()):
-            plan = planner.plan(
-                dict(zip(ARM_TORSO_JOINTS, q_from.tolist(), strict=True)),
-                dict(zip(ARM_TORSO_JOINTS, q_to.tolist(), strict=True)),
-                validity,
-                timeout=self.params.planner_timeout(i, len(planners)),
-                seed=self.seed + self.n_plans,
-            )
-            self.n_plans += 1
+            plan = self._arm_plan(planner, q_from, q_to, validity, i, len(planners))
             if plan.success or plan.reason != NO_PLAN:
                 break
         self.plan_seconds += time.perf_counter() - t
@@ -456,17 +455,32 @@ class FullRobot:
         try:
             if not (validity.free(q_from) and validity.free(q_to)):
                 return None
-            plan = self.ctx.planners(self.plan_world.model)[0].plan(
-                dict(zip(ARM_TORSO_JOINTS, q_from.tolist(), strict=True)),
-                dict(zip(ARM_TORSO_JOINTS, q_to.tolist(), strict=True)),
-                validity,
-                timeout=self.params.planner_timeout(0, n),
-                seed=self.seed + self.n_plans,
-            )
-            self.n_plans += 1
+            planner = self.ctx.planners(self.plan_world.model)[0]
+            plan = self._arm_plan(planner, q_from, q_to, validity, 0, n)
             return plan if plan.success else None
         finally:
             checker.keep_clear(0.0)
+
+    def _arm_plan(
+        self,
+        planner: ArmMotionPlanner,
+        q_from: np.ndarray,
+        q_to: np.ndarray,
+        validity: ArmValidity,
+        i: int,
+        n: int,
+    ) -> MotionPlan:
+        """``planner`` (the ``i``-th of ``n`` tried in turn) from ``q_from`` to ``q_to``
+        (torso + arm, (8,)), seeded by the plans made so far."""
+        plan = planner.plan(
+            dict(zip(ARM_TORSO_JOINTS, q_from.tolist(), strict=True)),
+            dict(zip(ARM_TORSO_JOINTS, q_to.tolist(), strict=True)),
+            validity,
+            timeout=self.params.planner_timeout(i, n),
+            seed=self.seed + self.n_plans,
+        )
+        self.n_plans += 1
+        return plan
 
     def _route(self, target: np.ndarray, arm: np.ndarray, carrying) -> list[np.ndarray]:
         """Base poses to drive through to ``target`` with the arm at ``arm`` (its drive

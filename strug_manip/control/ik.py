@@ -168,6 +168,22 @@ def _rotation_angle(R: np.ndarray) -> float:
     return 2.0 * math.atan2(math.sqrt(v.dot(v)), abs(float(quat[0])))  # = np.linalg.norm
 
 
+def _limit_bounds(model: mujoco.MjModel) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The qpos addresses (k,) of ``model``'s limited hinge and slide joints and the
+    bounds (k,), (k,) [rad or m] :data:`LIMIT_MARGIN` inside their ranges (at most a
+    quarter of a range): what :meth:`FetchIK._clip_into_limits` clips to, once."""
+    adr, lows, highs = [], [], []
+    kinds = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
+    for jid in range(model.njnt):
+        if model.jnt_limited[jid] and int(model.jnt_type[jid]) in kinds:
+            lo, hi = model.jnt_range[jid]
+            margin = min(LIMIT_MARGIN, 0.25 * (hi - lo))
+            adr.append(int(model.jnt_qposadr[jid]))
+            lows.append(lo + margin)
+            highs.append(hi - margin)
+    return np.array(adr, dtype=int), np.array(lows), np.array(highs)
+
+
 #: What DAQP takes for an absent bound (qpsolvers' convention).
 _NO_BOUND = 1e30
 
@@ -365,7 +381,7 @@ class FetchIK:
             self.posture = self._check_q("posture", posture)
         for j, v in self.posture.items():
             self._q_default[self._qadr[j]] = v
-        self._clip: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        self._clip = _limit_bounds(model)
         self._clip_into_limits(self._q_default)
 
         self._config = mink.Configuration(model, self._q_default)
@@ -432,20 +448,6 @@ class FetchIK:
     def _clip_into_limits(self, q: np.ndarray) -> None:
         """Clip every limited hinge/slide joint of qpos ``q`` (nq,) into its range, at
         least :data:`LIMIT_MARGIN` inside it (where the limit constraint is satisfied)."""
-        if self._clip is None:  # the limited joints, once (a loop over them per call
-            m = self.model  # was a tenth of a placement search)
-            adr, lows, highs = [], [], []
-            for jid in range(m.njnt):
-                if m.jnt_limited[jid] and int(m.jnt_type[jid]) in (
-                    int(mujoco.mjtJoint.mjJNT_HINGE),
-                    int(mujoco.mjtJoint.mjJNT_SLIDE),
-                ):
-                    lo, hi = m.jnt_range[jid]
-                    margin = min(LIMIT_MARGIN, 0.25 * (hi - lo))
-                    adr.append(int(m.jnt_qposadr[jid]))
-                    lows.append(lo + margin)
-                    highs.append(hi - margin)
-            self._clip = (np.array(adr, dtype=int), np.array(lows), np.array(highs))
         adr, lows, highs = self._clip
         q[adr] = np.minimum(np.maximum(q[adr], lows), highs)
 

@@ -84,7 +84,7 @@ class SkillParams:
             everything but the hand where it can [m]: the motion is planned in the
             believed cabinet, whose boards perception puts a centimetre or two off,
             and the arm lags its command on the way; a carried object whose end
-            grazed a board's front edge turned 14 degrees in the grasp, and the
+            grazed a board's front edge turned in the grasp (README), and the
             Place that followed caught the cell's floor and slid the cabinet. Where
             the start or the goal is nearer than this (an object just lifted, a pre-place
             beside an open door), or the first planner finds no such path, the
