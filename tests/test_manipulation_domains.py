@@ -664,13 +664,14 @@ def test_the_real_handle_motion_is_measured_on_the_part_acted_on(drawer_episode)
 
 
 def test_a_believed_knob_is_built_as_a_knob_and_grasped_pitched():
-    """A part perception saw with a knob gets a knob, its tip ``KNOB_TIP`` in front of
-    the grasp point, and the knob's grasps: pitched ones too, which a bar at the same
+    """A part perception saw with a knob gets a knob, its tip ``KNOB_GRASP_INSET`` in
+    front of the grasp point, and the knob's grasps: pitched ones too, which a bar at the same
     point does not offer (its pads would meet the front), and which a low drop-down
     flap needs. A bar follows the direction seen; an unknown style is refused."""
     from strug_manip.control import handle_grasps
     from strug_manip.control.grasps import knob_end
-    from strug_manip.objects.assembly import KNOB_TIP, CabinetModel, PartModel, assemble
+    from strug_manip.objects.assembly import CabinetModel, PartModel, assemble
+    from strug_manip.objects.generator import KNOB_GRASP_INSET
 
     axis = np.array([0.0, -1.0, 0.0])
     rect = (-0.25, 0.25, 0.30, 0.50)
@@ -685,7 +686,7 @@ def test_a_believed_knob_is_built_as_a_knob_and_grasped_pitched():
 
     knob, bar = part("knob"), part("bar")
     assert knob.handle == "knob" and np.allclose(knob.handle_axis, [1.0, 0.0, 0.0], atol=1e-6)
-    assert knob_end(knob) - knob.handle_pos[0] == pytest.approx(KNOB_TIP, abs=1e-9)
+    assert knob_end(knob) - knob.handle_pos[0] == pytest.approx(KNOB_GRASP_INSET, abs=1e-9)
     pitched = [g for g in handle_grasps(knob) if abs(g[2, 0]) > 0.1]
     assert len(pitched) >= 2 and not [g for g in handle_grasps(bar) if abs(g[2, 0]) > 0.1]
     assert abs(bar.handle_axis[1]) > 0.99 and abs(part("bar", "z").handle_axis[2]) > 0.99

@@ -43,7 +43,7 @@ from strug_manip.objects.generator import (
     CabinetSpec,
     Geom,
     PartSpec,
-    _inertial,
+    box,
     flap_stay_friction,
 )
 
@@ -57,10 +57,9 @@ FRONT = 0.018
 GAP = 0.003
 #: Bar handle: radius, length, standoff from the front face [m].
 BAR = (0.0065, 0.12, 0.032)
-#: Knob: the generator's middle radius [m], and how far its tip stands in front of the
-#: grasp point [m] (the generator's grasp point is 1 cm behind the tip); its length is
-#: kept within the generator's range (:data:`generator.KNOB_LENGTH`).
-KNOB_RADIUS, KNOB_TIP = 0.5 * sum(gen.KNOB_RADIUS), 0.01
+#: Knob radius: the generator's middle one [m] (its length follows the seen grasp point,
+#: :func:`_knob`).
+KNOB_RADIUS = 0.5 * sum(gen.KNOB_RADIUS)
 #: Unit vectors of the front frame's axes, by name.
 _AXES = {"y": np.array([0.0, 1.0, 0.0]), "z": np.array([0.0, 0.0, 1.0])}
 #: Handle styles a believed part may have (the generator's).
@@ -109,7 +108,8 @@ class PartModel:
             handle_along: a bar's direction on the front, ``y`` or ``z`` (None: the
             generator's for the part, vertical on a side door, else horizontal). A
             knob stands out of the front face with its axis through the grasp point,
-            its tip :data:`KNOB_TIP` in front of it (as the generator grasps knobs).
+            its tip :data:`generator.KNOB_GRASP_INSET` in front of it (as the
+            generator grasps knobs).
         damping: [N s/m] or [N m s/rad]; friction: [N] or [N m].
         stay: a top- or bottom-hinged flap's friction stay, as the generator fits one
             (:data:`~strug_manip.objects.generator.FLAP_STAY_HOLD`): the joint's
@@ -236,21 +236,16 @@ def scene_object_pose(
     return T
 
 
-def _box(name: str, lo, hi, rgba, material: str = "wood") -> Geom:
-    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
-    return Geom(name, "box", tuple(0.5 * (lo + hi)), tuple(hi - lo), material=material, rgba=rgba)
-
-
 def _carcass(m: CabinetModel, cells: list[tuple[float, float, float, float]]) -> list[Geom]:
     """Carcass boards in the front frame: sides, top, bottom, back, and boards framing
     every cell."""
     w, h, D, t = m.width, m.height, m.depth, WALL
     geoms = [
-        _box("side_left", (-D, -w / 2, 0), (0, -w / 2 + t, h), _BODY_RGBA),
-        _box("side_right", (-D, w / 2 - t, 0), (0, w / 2, h), _BODY_RGBA),
-        _box("top", (-D, -w / 2 + t, h - t), (0, w / 2 - t, h), _BODY_RGBA),
-        _box("bottom", (-D, -w / 2 + t, 0), (0, w / 2 - t, t), _BODY_RGBA),
-        _box("back", (-D, -w / 2 + t, t), (-D + BACK, w / 2 - t, h - t), _BODY_RGBA),
+        box("side_left", (-D, -w / 2, 0), (0, -w / 2 + t, h), _BODY_RGBA),
+        box("side_right", (-D, w / 2 - t, 0), (0, w / 2, h), _BODY_RGBA),
+        box("top", (-D, -w / 2 + t, h - t), (0, w / 2 - t, h), _BODY_RGBA),
+        box("bottom", (-D, -w / 2 + t, 0), (0, w / 2 - t, t), _BODY_RGBA),
+        box("back", (-D, -w / 2 + t, t), (-D + BACK, w / 2 - t, h - t), _BODY_RGBA),
     ]
     lo_y, hi_y, lo_z, hi_z = -w / 2 + t, w / 2 - t, t, h - t
     for i, (y0, y1, z0, z1) in enumerate(cells):
@@ -259,42 +254,31 @@ def _carcass(m: CabinetModel, cells: list[tuple[float, float, float, float]]) ->
             za, zb = max(za, lo_z - t), min(zb, hi_z + t)
             if zb - za > 1e-3 and yb - ya > 1e-3:
                 geoms.append(
-                    _box(f"frame_{i}_{'bt'[k]}", (-D + BACK, ya, za), (0, yb, zb), _BODY_RGBA)
+                    box(f"frame_{i}_{'bt'[k]}", (-D + BACK, ya, za), (0, yb, zb), _BODY_RGBA)
                 )
         for k, (ya2, yb2) in enumerate(((y0 - t, y0), (y1, y1 + t))):
             ya2, yb2 = max(ya2, lo_y - t), min(yb2, hi_y + t)
             if yb2 - ya2 > 1e-3 and z1 - z0 > 1e-3:
                 geoms.append(
-                    _box(f"frame_{i}_{'lr'[k]}", (-D + BACK, ya2, z0), (0, yb2, z1), _BODY_RGBA)
+                    box(f"frame_{i}_{'lr'[k]}", (-D + BACK, ya2, z0), (0, yb2, z1), _BODY_RGBA)
                 )
     return geoms
 
 
-def _bar(centre: np.ndarray, along: str) -> list[Geom]:
-    """A bar handle whose grasp point (bar centre) is ``centre`` (link frame)."""
+def _bar(grasp: np.ndarray, along: str) -> list[Geom]:
+    """A bar handle (:data:`BAR`) whose grasp point (bar centre) is ``grasp`` (link
+    frame)."""
     r, length, s = BAR
-    geoms = [
-        Geom("handle_bar", "cylinder", tuple(centre), (r, length), along, "metal", _METAL_RGBA)
-    ]
-    k = "xyz".index(along)
-    for i, sign in enumerate((-1.0, 1.0)):
-        p = centre - np.array([0.5 * s, 0.0, 0.0])
-        p[k] += sign * (0.5 * length - 0.01)
-        geoms.append(
-            Geom(f"handle_post_{i}", "cylinder", tuple(p), (0.8 * r, s), "x", "metal", _METAL_RGBA)
-        )
-    return geoms
+    return gen.bar_handle(grasp, along, r, length, s, _METAL_RGBA)
 
 
 def _knob(grasp: np.ndarray) -> tuple[list[Geom], np.ndarray]:
     """A knob on the front face (front frame, the face at x = 0) whose tip stands
-    :data:`KNOB_TIP` in front of the seen grasp point ``grasp`` (its length clipped to
-    the generator's range), and the grasp point it has, (3,) [m] (front frame)."""
-    length = float(np.clip(grasp[0] + KNOB_TIP, *gen.KNOB_LENGTH))
-    y, z = float(grasp[1]), float(grasp[2])
-    knob = Geom("handle_knob", "cylinder", (0.5 * length, y, z), (KNOB_RADIUS, length), "x",
-                "metal", _METAL_RGBA)  # fmt: skip
-    return [knob], np.array([max(length - KNOB_TIP, 0.5 * length), y, z])
+    :data:`generator.KNOB_GRASP_INSET` in front of the seen grasp point ``grasp`` (its
+    length clipped to the generator's range), and the grasp point it has, (3,) [m]
+    (front frame)."""
+    length = float(np.clip(grasp[0] + gen.KNOB_GRASP_INSET, *gen.KNOB_LENGTH))
+    return gen.knob_handle(np.array([0.0, grasp[1], grasp[2]]), KNOB_RADIUS, length, _METAL_RGBA)
 
 
 def _moved_by(geoms: list[Geom], shift: np.ndarray) -> list[Geom]:
@@ -316,14 +300,14 @@ def _part_geoms(
     if p.kind in ("panel", "shelf"):
         if p.kind == "panel":
             return (
-                [_box("panel", (-FRONT, -fw / 2, -fh / 2), (0, fw / 2, fh / 2), _FRONT_RGBA)],
+                [box("panel", (-FRONT, -fw / 2, -fh / 2), (0, fw / 2, fh / 2), _FRONT_RGBA)],
                 centre,
                 None,
                 None,
                 (None, None),
             )
         origin = np.array([0.0, yc, z0])
-        board = _box(
+        board = box(
             "board", (-depth + BACK + 0.001, -fw / 2, 0), (0, fw / 2, SHELF_BOARD), _BODY_RGBA
         )
         inner = np.array([depth, y1 - y0, z1 - z0 - SHELF_BOARD])
@@ -341,11 +325,11 @@ def _part_geoms(
         zb = -0.5 * (z1 - z0) + 0.005
         xr = -FRONT - bd
         geoms = [
-            _box("front", (-FRONT, -fw / 2, -fh / 2), (0, fw / 2, fh / 2), _FRONT_RGBA),
-            _box("bottom", (xr, -bw / 2, zb), (-FRONT, bw / 2, zb + tb), _FRONT_RGBA),
-            _box("side_left", (xr, -bw / 2, zb + tb), (-FRONT, -bw / 2 + tb, zb + bh), _FRONT_RGBA),
-            _box("side_right", (xr, bw / 2 - tb, zb + tb), (-FRONT, bw / 2, zb + bh), _FRONT_RGBA),
-            _box("back", (xr, -bw / 2 + tb, zb + tb), (xr + tb, bw / 2 - tb, zb + bh), _FRONT_RGBA),
+            box("front", (-FRONT, -fw / 2, -fh / 2), (0, fw / 2, fh / 2), _FRONT_RGBA),
+            box("bottom", (xr, -bw / 2, zb), (-FRONT, bw / 2, zb + tb), _FRONT_RGBA),
+            box("side_left", (xr, -bw / 2, zb + tb), (-FRONT, -bw / 2 + tb, zb + bh), _FRONT_RGBA),
+            box("side_right", (xr, bw / 2 - tb, zb + tb), (-FRONT, bw / 2, zb + bh), _FRONT_RGBA),
+            box("back", (xr, -bw / 2 + tb, zb + tb), (xr + tb, bw / 2 - tb, zb + bh), _FRONT_RGBA),
         ]
         grasp = (
             centre + np.array([BAR[2], 0.0, 0.0])
@@ -364,7 +348,7 @@ def _part_geoms(
     origin = np.asarray(p.origin, dtype=float)
     lo = np.array([-FRONT, y0 + GAP, z0 + GAP]) - origin
     hi = np.array([0.0, y1 - GAP, z1 - GAP]) - origin
-    geoms = [_box("panel", lo, hi, _FRONT_RGBA)]
+    geoms = [box("panel", lo, hi, _FRONT_RGBA)]
     side = p.hinge in ("left", "right")
     e = {"left": (0, 1, 0), "right": (0, -1, 0), "top": (0, 0, -1), "bottom": (0, 0, 1)}[p.hinge]
     span = fw if side else fh
@@ -433,7 +417,7 @@ def assemble(
         geoms_o = [moved(g, R @ np.asarray(g.pos) - np.asarray(g.pos)) for g in geoms]
         movable = p.kind in ("drawer", "door")
         y0, y1, z0, z1 = p.rect
-        inertial = _inertial(geoms_o, densities)
+        inertial = gen.mass_properties(geoms_o, densities)
         friction = float(p.friction) if movable else 0.0
         if p.stay is not None:  # as the generator fits one
             friction = flap_stay_friction(p.stay, inertial)
@@ -486,7 +470,7 @@ def assemble(
         row_heights=np.array([model.height]),
         col_widths=np.array([model.width]),
         body_geoms=tuple(body),
-        body_inertial=_inertial(body, densities),
+        body_inertial=gen.mass_properties(body, densities),
         parts=tuple(parts),
         colors={"body": _BODY_RGBA, "front": _FRONT_RGBA, "handle": _METAL_RGBA},
     )

@@ -241,8 +241,9 @@ class Inertial:
     inertia: np.ndarray
 
 
-def _inertial(geoms: Sequence[Geom], densities: dict[str, float]) -> Inertial:
-    """Combine the geoms' masses and inertias (parallel-axis theorem)."""
+def mass_properties(geoms: Sequence[Geom], densities: dict[str, float]) -> Inertial:
+    """The geoms' combined mass, centre of mass and inertia (parallel-axis theorem),
+    each geom's mass its volume times ``densities[material]`` [kg/m^3]."""
     masses = np.array([g.volume() * densities[g.material] for g in geoms])
     centers = np.array([g.pos for g in geoms], dtype=float)
     total = float(masses.sum())
@@ -460,11 +461,46 @@ def _count(
     return int(rng.integers(n_min, n_max + 1))
 
 
-def _box(name: str, lo: Sequence[float], hi: Sequence[float], rgba, material="wood") -> Geom:
+def box(name: str, lo: Sequence[float], hi: Sequence[float], rgba, material="wood") -> Geom:
+    """An axis-aligned box geom from its lower and upper corners (3,) [m]."""
     lo_a, hi_a = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
     center = tuple(float(v) for v in 0.5 * (lo_a + hi_a))
     size = tuple(float(v) for v in hi_a - lo_a)
     return Geom(name, "box", center, size, material=material, rgba=rgba)
+
+
+#: How far a knob's grasp point lies behind its tip [m] (the fingertips' half width).
+KNOB_GRASP_INSET = 0.01
+
+
+def bar_handle(
+    grasp: np.ndarray, along: str, radius: float, length: float, standoff: float, rgba
+) -> list[Geom]:
+    """A bar handle whose grasp point (the bar's centre, (3,) [m]) is ``grasp``, the
+    bar along ``along`` ("x", "y" or "z") ``standoff`` in front of the face (+x), held
+    by two posts 1 cm in from its ends."""
+    g = np.asarray(grasp, dtype=float)
+    bar = tuple(float(v) for v in g)
+    geoms = [Geom("handle_bar", "cylinder", bar, (radius, length), along, "metal", rgba)]
+    k = "xyz".index(along)
+    for i, sign in enumerate((-1.0, 1.0)):
+        p = g - np.array([0.5 * standoff, 0.0, 0.0])
+        p[k] += sign * (0.5 * length - 0.01)
+        post = (0.8 * radius, standoff)
+        at = tuple(float(v) for v in p)
+        geoms.append(Geom(f"handle_post_{i}", "cylinder", at, post, "x", "metal", rgba))
+    return geoms
+
+
+def knob_handle(
+    face: np.ndarray, radius: float, length: float, rgba
+) -> tuple[list[Geom], np.ndarray]:
+    """A knob standing ``length`` [m] out of the face (+x) at ``face`` (3,) [m], and its
+    grasp point (3,): :data:`KNOB_GRASP_INSET` behind the tip, at most half way in."""
+    x0, y, z = (float(v) for v in face)
+    knob = Geom("handle_knob", "cylinder", (x0 + 0.5 * length, y, z), (radius, length), "x",
+                "metal", rgba)  # fmt: skip
+    return [knob], np.array([x0 + max(length - KNOB_GRASP_INSET, 0.5 * length), y, z])
 
 
 def _handle_geoms(
@@ -479,25 +515,12 @@ def _handle_geoms(
     ``x = center[0]``), and its grasp point, (3,) [m]."""
     x0, y, z = float(center[0]), float(center[1]), float(center[2])
     if kind == "bar":
-        r, s = params["bar_radius"], params["bar_standoff"]
+        s = params["bar_standoff"]
+        grasp = np.array([x0 + s, y, z])
         length = min(params["bar_length"], max_len)
-        geoms = [
-            Geom("handle_bar", "cylinder", (x0 + s, y, z), (r, length), bar_dir, "metal", rgba),
-        ]
-        k = "xyz".index(bar_dir)
-        for i, sign in enumerate((-1.0, 1.0)):
-            p = np.array([x0 + 0.5 * s, y, z])
-            p[k] += sign * (0.5 * length - 0.01)
-            geoms.append(
-                Geom(f"handle_post_{i}", "cylinder", tuple(p), (0.8 * r, s), "x", "metal", rgba)
-            )
-        return geoms, np.array([x0 + s, y, z])
+        return bar_handle(grasp, bar_dir, params["bar_radius"], length, s, rgba), grasp
     if kind == "knob":
-        r, length = params["knob_radius"], params["knob_length"]
-        knob = Geom(
-            "handle_knob", "cylinder", (x0 + 0.5 * length, y, z), (r, length), "x", "metal", rgba
-        )
-        return [knob], np.array([x0 + max(length - 0.01, 0.5 * length), y, z])
+        return knob_handle(center, params["knob_radius"], params["knob_length"], rgba)
     return [], np.array([x0, y, z])
 
 
@@ -547,14 +570,14 @@ def generate_cabinet(
     y_lo, y_hi = -0.5 * W + t, 0.5 * W - t
     z_bot, z_top = plinth + t, H - t  # inner floor and ceiling of the carcass
     body: list[Geom] = [
-        _box("side_left", (-0.5 * D, -0.5 * W, 0.0), (xf, y_lo, H), body_rgba),
-        _box("side_right", (-0.5 * D, y_hi, 0.0), (xf, 0.5 * W, H), body_rgba),
-        _box("top", (xb, y_lo, z_top), (xf, y_hi, H), body_rgba),
-        _box("bottom", (xb, y_lo, plinth), (xf, y_hi, z_bot), body_rgba),
-        _box("back", (-0.5 * D, y_lo, plinth), (xb, y_hi, z_top), body_rgba),
+        box("side_left", (-0.5 * D, -0.5 * W, 0.0), (xf, y_lo, H), body_rgba),
+        box("side_right", (-0.5 * D, y_hi, 0.0), (xf, 0.5 * W, H), body_rgba),
+        box("top", (xb, y_lo, z_top), (xf, y_hi, H), body_rgba),
+        box("bottom", (xb, y_lo, plinth), (xf, y_hi, z_bot), body_rgba),
+        box("back", (-0.5 * D, y_lo, plinth), (xb, y_hi, z_top), body_rgba),
     ]
     if plinth > 0:
-        body.append(_box("kick", (xf - 0.03 - t, y_lo, 0.0), (xf - 0.03, y_hi, plinth), body_rgba))
+        body.append(box("kick", (xf - 0.03 - t, y_lo, 0.0), (xf - 0.03, y_hi, plinth), body_rgba))
     for i, (sx, sy) in enumerate(((1, 1), (1, -1), (-1, 1), (-1, -1))):
         center = (sx * (0.5 * D - GLIDE_INSET), sy * (0.5 * W - GLIDE_INSET), 0.0)
         body.append(Geom(f"glide_{i}", "sphere", center, (GLIDE_RADIUS,), rgba=(0.2, 0.2, 0.2, 1)))
@@ -569,11 +592,11 @@ def generate_cabinet(
         y += w + t
     for i in range(rows - 1):
         z1 = z_edges[i][0]
-        body.append(_box(f"shelf_divider_{i}", (xb, y_lo, z1 - t), (xf, y_hi, z1), body_rgba))
+        body.append(box(f"shelf_divider_{i}", (xb, y_lo, z1 - t), (xf, y_hi, z1), body_rgba))
     for i, (z0, z1) in enumerate(z_edges):
         for j in range(cols - 1):
             y1 = y_edges[j][1]
-            body.append(_box(f"divider_{i}_{j}", (xb, y1, z0), (xf, y1 + t, z1), body_rgba))
+            body.append(box(f"divider_{i}_{j}", (xb, y1, z0), (xf, y1 + t, z1), body_rgba))
 
     # --- cells ----------------------------------------------------------------------
     n_cells = rows * cols
@@ -613,7 +636,7 @@ def generate_cabinet(
 
     parts = []
     for d in drafts:
-        inertial = _inertial(d["geoms"], densities)
+        inertial = mass_properties(d["geoms"], densities)
         if d["kind"] == "door" and d["hinge"] in ("top", "bottom"):
             # Friction stay: hold the flap against gravity, even horizontal.
             d["friction"] = flap_stay_friction(_uniform(rng, FLAP_STAY_HOLD), inertial)
@@ -632,7 +655,7 @@ def generate_cabinet(
         row_heights=np.asarray(row_heights),
         col_widths=np.asarray(col_widths),
         body_geoms=tuple(body),
-        body_inertial=_inertial(body, densities),
+        body_inertial=mass_properties(body, densities),
         parts=tuple(parts),
         colors=colors,
     )
@@ -692,11 +715,11 @@ def _draft_part(
         zb = -0.5 * h + DRAWER_FLOOR_CLEARANCE  # box bottom, link frame
         xr = -tf - bd  # box rear
         geoms = [
-            _box("front", (-tf, -0.5 * fw, -0.5 * fh), (0.0, 0.5 * fw, 0.5 * fh), front),
-            _box("bottom", (xr, -0.5 * bw, zb), (-tf, 0.5 * bw, zb + tb), front),
-            _box("side_left", (xr, -0.5 * bw, zb + tb), (-tf, -0.5 * bw + tb, zb + bh), front),
-            _box("side_right", (xr, 0.5 * bw - tb, zb + tb), (-tf, 0.5 * bw, zb + bh), front),
-            _box("back", (xr, -0.5 * bw + tb, zb + tb), (xr + tb, 0.5 * bw - tb, zb + bh), front),
+            box("front", (-tf, -0.5 * fw, -0.5 * fh), (0.0, 0.5 * fw, 0.5 * fh), front),
+            box("bottom", (xr, -0.5 * bw, zb), (-tf, 0.5 * bw, zb + tb), front),
+            box("side_left", (xr, -0.5 * bw, zb + tb), (-tf, -0.5 * bw + tb, zb + bh), front),
+            box("side_right", (xr, 0.5 * bw - tb, zb + tb), (-tf, 0.5 * bw, zb + bh), front),
+            box("back", (xr, -0.5 * bw + tb, zb + tb), (xr + tb, 0.5 * bw - tb, zb + bh), front),
         ]
         hg, hpos = _handle_geoms(style, np.zeros(3), "y", hp, 0.6 * fw, metal)
         inner = np.array([bd - tb, bw - 2 * tb, bh - tb])
@@ -728,7 +751,7 @@ def _draft_part(
         }[hinge]
         axis = np.cross(e, np.array([1.0, 0.0, 0.0]))
         c = cell_center - origin  # panel centre, link frame
-        panel = _box(
+        panel = box(
             "panel",
             (c[0] - tf, c[1] - 0.5 * fw, c[2] - 0.5 * fh),
             (c[0], c[1] + 0.5 * fw, c[2] + 0.5 * fh),
@@ -760,12 +783,12 @@ def _draft_part(
         )
         return out
     if kind == "panel":
-        geoms = (_box("panel", (-tf, -0.5 * fw, -0.5 * fh), (0.0, 0.5 * fw, 0.5 * fh), front),)
+        geoms = (box("panel", (-tf, -0.5 * fw, -0.5 * fh), (0.0, 0.5 * fw, 0.5 * fh), front),)
         out.update(joint_type="fixed", origin=cell_center, geoms=geoms)
         return out
     # Open shelf: a board on the cell floor; link frame at the cell's front-bottom edge.
     origin = np.array([xf, yc, z0])
-    board = _box(
+    board = box(
         "board",
         (xb - xf + 0.001, -0.5 * w + 0.001, 0.0),
         (0.0, 0.5 * w - 0.001, SHELF_BOARD),
