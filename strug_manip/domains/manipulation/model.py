@@ -68,6 +68,7 @@ from strug_manip.control.skills import HANDLE_RADIUS, holds_object
 from strug_manip.domains.manipulation import belief as belief_mod
 from strug_manip.domains.manipulation.actions import (
     DEFAULT_PROBES,
+    SAME_PART,
     SKILLS,
     TABLE,
     CataloguePart,
@@ -133,6 +134,10 @@ BEFORE_MOTION = (*CANNOT_START, str(Status.NO_MOTION_PLAN))
 #: path in the planner's budget a third rarely does (a held-out door episode spent seven
 #: steps on one ``Place`` that way).
 NO_PLAN_TRIES = 2
+#: A real front this near its closed position is seen shut, by joint type [m or rad]:
+#: the head camera's cloud shows a front flush with the carcass to about a centimetre,
+#: and 0.1 rad is 2 cm at the edge of a 0.2 m door.
+SHUT = {"prismatic": 0.02, "revolute": 0.1}
 #: Their status codes, as observation keys carry them.
 BEFORE_MOTION_CODES = frozenset(STATUS_CODES[x] for x in BEFORE_MOTION)
 #: The real robot plans an opening or a probe in at most this many models before it
@@ -190,7 +195,7 @@ class RealEpisode:
         still: the last real step stopped before anything moved (:data:`BEFORE_MOTION`).
         handles: the true cabinet's graspable parts' handles where they were when the
             episode began, world (3,) [m], by link: what tells which real part an
-            opening or a probe acts on (:meth:`ManipulationPOMDP._real_part`).
+            opening or a probe acts on (:meth:`ManipulationPOMDP._real_link`).
     """
 
     world: ManipulationWorld
@@ -330,14 +335,18 @@ class ManipulationPOMDP(GenerativePOMDP):
         head camera's cloud shows to millimetres; taken from the simulator as a perfect
         localisation; each particle's own cabinet moves by that rigid motion from where
         it stood, its own front where perception put it) and, when the hand is empty,
-        where the object rests (it is tracked as well). Each particle keeps its own
-        parts' joints and, when the real hand holds the object, its own idea of the
+        where the object rests (it is tracked as well), and which parts stand shut
+        (:meth:`_shut_parts`: a front flush with the carcass; which way a part opens
+        the camera does not show, so an open part keeps each particle's own joint).
+        Each particle keeps its other parts' joints and, when the real hand holds the
+        object, its own idea of the
         grasp; a particle whose hand is empty while the real one holds the object (its
         twin's Place went through where the real one stopped) gets the object back in
         its hand, in the real grasp. Without this a cabinet the real robot dragged by
         5 cm stays put in every particle, and the next Place aims 5 cm off; and after a
         real Place that stopped, every particle believes the object placed and none
-        plans to place it again.
+        plans to place it again; and a drawer the arm pushed shut on its way to the
+        cell stays open in every particle, and every later Place aims into it.
         """
         real, w = self.real, self.worlds
         if real is None or w is None or all(s.t == 0 for s in belief.states):
@@ -350,6 +359,7 @@ class ManipulationPOMDP(GenerativePOMDP):
         holding = holds_object(rw)
         known = [] if holding else [OBJECT_JOINT]
         T_go = np.linalg.inv(rw.site_pose(GRIPPER_SITE)) @ rw.object_pose() if holding else None
+        shut = self._shut_parts()
         done: dict[ManipState, ManipState] = {}
         states = []
         for s in belief.states:
@@ -359,6 +369,9 @@ class ManipulationPOMDP(GenerativePOMDP):
                 tw.world.set_cabinet_pose(moved @ tw.world.scene.T_world_cabinet)
                 tw.world.copy_joints(rw, known)
                 tw.set_robot_base(base)
+                opened = self._opened(s.origin, shut, tw.world)
+                if opened:
+                    tw.world.set_parts(opened)
                 if T_go is not None and not holds_object(tw.world):
                     tw.world.set_object_pose(tw.world.site_pose(GRIPPER_SITE) @ T_go)
                 done[s] = ManipState(s.origin, tw.snapshot(), s.t, s.last)
@@ -366,6 +379,36 @@ class ManipulationPOMDP(GenerativePOMDP):
         self._belief = ParticleBelief(states, belief.weights, belief.origin)
         self._reps = self._representatives(self._belief)
         return self._belief
+
+    def _shut_parts(self) -> list[int]:
+        """The catalogued parts whose true part stands shut now (:data:`SHUT`): the true
+        part whose handle, when the episode began, was within :data:`SAME_PART` of the
+        catalogued point (none: perception's part has no true counterpart there)."""
+        rw = self._need_real().world
+        qs, spec = rw.part_positions(), rw.scene.cabinet_spec
+        shut = []
+        for k in range(len(self.parts)):
+            link = self._real_link(k, within=SAME_PART)
+            if link is None:
+                continue
+            p = spec.part(link)
+            if abs(qs[rw.scene.cabinet_prefix + p.joint]) <= SHUT[p.joint_type]:
+                shut.append(k)
+        return shut
+
+    def _opened(self, i: int, shut: list[int], world: ManipulationWorld) -> dict[str, float]:
+        """Particle ``i``'s joints (in its twin's ``world``) of the parts ``shut`` that it
+        holds open, each at 0 (closed), by joint name."""
+        spec, qs = world.scene.cabinet_spec, world.part_positions()
+        out = {}
+        for k in shut:
+            link = self.parts[k].links[i]
+            p = spec.part(link) if link is not None else None
+            if p is None or not p.movable:
+                continue
+            if abs(qs[world.scene.cabinet_prefix + p.joint]) > SHUT[p.joint_type]:
+                out[p.joint] = 0.0
+        return out
 
     def _unmoved(self, belief: ParticleBelief) -> ParticleBelief:
         """After a real step that stopped before anything moved (:data:`BEFORE_MOTION`),
@@ -826,22 +869,25 @@ class ManipulationPOMDP(GenerativePOMDP):
         spec = world.scene.cabinet_spec
         T = world.cabinet_pose()
         qs = world.part_positions()
-        link = self._real_part(a) if i == REAL else self.parts[a.part].links[i]
+        link = self._real_link(a.part) if i == REAL else self.parts[a.part].links[i]
         if link is None:
             return np.zeros(3)
         p = spec.part(link)
         pt = part_point(p, qs.get(world.scene.cabinet_prefix + p.joint, 0.0), T)
         return np.zeros(3) if pt is None else pt
 
-    def _real_part(self, a: ManipAction) -> str | None:
-        """The true cabinet's part (link) that opening or probe ``a`` acts on: the one
-        whose handle, where it was when the episode began, is nearest the catalogued
-        part's point. Not where the handles are now: a door swung open puts its handle
-        far from where it was named, nearer another part's, and its motion would be
-        measured on that other part. None: the cabinet has no graspable part."""
+    def _real_link(self, k: int, within: float = np.inf) -> str | None:
+        """The true cabinet's part (link) at catalogued part ``k``, which an opening or
+        a probe of ``k`` acts on: the one whose handle, where it was when the episode
+        began, is nearest the catalogued part's point, if within ``within`` [m]. Not
+        where the handles are now: a door swung open puts its handle far from where it
+        was named, nearer another part's, and its motion would be measured on that
+        other part. None: the cabinet has no graspable part (that near)."""
         handles = self._need_real().handles
-        ref = self.parts[a.part].point
-        return min(handles, key=lambda k: float(np.linalg.norm(handles[k] - ref)), default=None)
+        ref = self.parts[k].point
+        dist = {n: float(np.linalg.norm(h - ref)) for n, h in handles.items()}
+        link = min(dist, key=dist.__getitem__, default=None)
+        return link if link is not None and dist[link] <= within else None
 
     def _reward(self, spec: CabinetSpec, target: str | None, world, out: Outcome) -> float:
         """-10 when dragged; +10 when a ``Place`` leaves the object resting in the target
