@@ -90,7 +90,7 @@ from strug_manip.domains.manipulation.state import (
     observation_key,
 )
 from strug_manip.domains.manipulation.worlds import ParticleWorlds, Timers
-from strug_manip.objects.generator import CabinetSpec
+from strug_manip.objects.generator import CabinetSpec, PartSpec
 from strug_manip.objects.hypotheses import BelievedJoint
 from strug_manip.robot.fetch import BASE_JOINTS, GRIPPER_SITE
 from strug_manip.world.scene import SceneConfig
@@ -339,14 +339,14 @@ class ManipulationPOMDP(GenerativePOMDP):
         (:meth:`_shut_parts`: a front flush with the carcass; which way a part opens
         the camera does not show, so an open part keeps each particle's own joint).
         Each particle keeps its other parts' joints and, when the real hand holds the
-        object, its own idea of the
-        grasp; a particle whose hand is empty while the real one holds the object (its
-        twin's Place went through where the real one stopped) gets the object back in
-        its hand, in the real grasp. Without this a cabinet the real robot dragged by
-        5 cm stays put in every particle, and the next Place aims 5 cm off; and after a
-        real Place that stopped, every particle believes the object placed and none
-        plans to place it again; and a drawer the arm pushed shut on its way to the
-        cell stays open in every particle, and every later Place aims into it.
+        object, its own idea of the grasp; a particle whose hand is empty while the real
+        one holds the object (its twin's Place went through where the real one stopped)
+        gets the object back in its hand, in the real grasp. Without this a cabinet the
+        real robot dragged by 5 cm stays put in every particle, and the next Place aims
+        5 cm off; and after a real Place that stopped, every particle believes the
+        object placed and none plans to place it again; and a drawer the arm pushed
+        shut on its way to the cell stays open in every particle, and every later Place
+        aims into it.
         """
         real, w = self.real, self.worlds
         if real is None or w is None or all(s.t == 0 for s in belief.states):
@@ -385,30 +385,16 @@ class ManipulationPOMDP(GenerativePOMDP):
         part whose handle, when the episode began, was within :data:`SAME_PART` of the
         catalogued point (none: perception's part has no true counterpart there)."""
         rw = self._need_real().world
-        qs, spec = rw.part_positions(), rw.scene.cabinet_spec
-        shut = []
-        for k in range(len(self.parts)):
-            link = self._real_link(k, within=SAME_PART)
-            if link is None:
-                continue
-            p = spec.part(link)
-            if abs(qs[rw.scene.cabinet_prefix + p.joint]) <= SHUT[p.joint_type]:
-                shut.append(k)
-        return shut
+        links = [self._real_link(k, within=SAME_PART) for k in range(len(self.parts))]
+        return [k for k, link in enumerate(links)
+                if link is not None and _shut(rw, rw.scene.cabinet_spec.part(link))]  # fmt: skip
 
     def _opened(self, i: int, shut: list[int], world: ManipulationWorld) -> dict[str, float]:
         """Particle ``i``'s joints (in its twin's ``world``) of the parts ``shut`` that it
         holds open, each at 0 (closed), by joint name."""
-        spec, qs = world.scene.cabinet_spec, world.part_positions()
-        out = {}
-        for k in shut:
-            link = self.parts[k].links[i]
-            p = spec.part(link) if link is not None else None
-            if p is None or not p.movable:
-                continue
-            if abs(qs[world.scene.cabinet_prefix + p.joint]) > SHUT[p.joint_type]:
-                out[p.joint] = 0.0
-        return out
+        spec = world.scene.cabinet_spec
+        held = [spec.part(link) for k in shut if (link := self.parts[k].links[i]) is not None]
+        return {p.joint: 0.0 for p in held if not _shut(world, p)}
 
     def _unmoved(self, belief: ParticleBelief) -> ParticleBelief:
         """After a real step that stopped before anything moved (:data:`BEFORE_MOTION`),
@@ -1090,6 +1076,12 @@ def _handles(world: ManipulationWorld) -> dict[str, np.ndarray]:
 def _position(world: ManipulationWorld, joint: str) -> float:
     """Cabinet joint ``joint``'s position in ``world`` [m or rad] (0 for a fixed part)."""
     return world.part_positions().get(world.scene.cabinet_prefix + joint, 0.0)
+
+
+def _shut(world: ManipulationWorld, part: PartSpec) -> bool:
+    """``part`` stands within :data:`SHUT` of closed in ``world`` (a fixed part always)."""
+    kind = part.joint_type
+    return kind == "fixed" or abs(_position(world, part.joint)) <= SHUT[kind]
 
 
 def _first_feasible(runs) -> Outcome | None:
