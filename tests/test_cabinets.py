@@ -14,13 +14,8 @@ import pytest
 from planners.errors import ConfigError, PlannersError, UnknownNameError
 from strug_manip.objects import generator as gen
 from strug_manip.objects.generator import PartSpec, generate_cabinet
-from strug_manip.objects.partnet import (
-    ArticulatedObject,
-    add_to_spec,
-    cabinet_urdf,
-    load_articulated_object,
-    write_partnet,
-)
+from strug_manip.objects.loader import ArticulatedObject, add_to_spec, load_articulated_object
+from strug_manip.objects.partnet import cabinet_urdf, write_partnet
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "models" / "cabinets"
 EXAMPLE_DIRS = sorted(p for p in EXAMPLES.iterdir() if (p / "mobility.urdf").is_file())

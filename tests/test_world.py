@@ -173,7 +173,7 @@ def test_body_pose_by_name(world) -> None:
 
 def test_a_spec_loads_in_memory_as_its_written_folder_does(tmp_path) -> None:
     from strug_manip.objects import generate_cabinet, load_articulated_object, write_partnet
-    from strug_manip.objects.partnet import load_cabinet_spec
+    from strug_manip.objects.loader import load_cabinet_spec
 
     spec = generate_cabinet(17)
     mem = load_cabinet_spec(spec)
