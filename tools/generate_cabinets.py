@@ -19,8 +19,8 @@ import time
 from pathlib import Path
 
 from planners.errors import PlannersError
-from strug_manip.objects.generator import PART_KINDS, generate_cabinet
 from strug_manip.objects import load_articulated_object, write_partnet
+from strug_manip.objects.generator import PART_KINDS, generate_cabinet
 
 _NAMES = {("drawer",): "drawers", ("door",): "doors", ("shelf",): "shelves"}
 
