@@ -155,8 +155,10 @@ def test_bad_belief_arguments_raise(truth) -> None:
         SceneConfig(cabinet_spec=spec, cabinet_folder="somewhere")
     with pytest.raises(ConfigError, match="cabinet_0003"):
         SceneConfig(cabinet_spec="cabinet_0003")  # type: ignore[arg-type]
-    with pytest.raises(ConfigError, match="cabinet_folder"):
-        ManipulationWorld.from_cabinet_spec(spec, SceneConfig(cabinet_folder="somewhere"))
+    # A spec replaces the config's cabinet, a folder's too (a real object's particle).
+    folded = ManipulationWorld.from_cabinet_spec(spec, SceneConfig(cabinet_folder="somewhere"))
+    assert folded.config.cabinet_folder is None and folded.scene.cabinet_spec is spec
+    folded.close()
     with pytest.raises(ConfigError, match="'belief'"):
         OpenDrawer(grasp(truth, "link_1"), true_joint(truth, "link_1")).run(
             truth,

@@ -352,11 +352,34 @@ def evaluate_seed(
 ) -> dict:
     """Every part of the drawers-only and the doors-only cabinet of ``seed``, with
     planning twins of the physics steps ``twin_steps`` [s]."""
+    configs = {
+        kind: SceneConfig(cabinet_seed=seed, cabinet_kinds=(kind,)) for kind in ("drawer", "door")
+    }
+    return evaluate_scenes(seed, configs, twin_steps, only_twin)
+
+
+def evaluate_object(
+    folder: Path, twin_steps: tuple[float, ...] = (TWIN_STEP,), only_twin: bool = False
+) -> dict:
+    """Every part of the real object in ``folder`` (its description derived from its
+    URDF, semantics and geometry: :func:`~strug_manip.objects.describe.describe_object`),
+    keyed by the folder's name."""
+    configs = {"object": SceneConfig(cabinet_folder=folder)}
+    return evaluate_scenes(folder.name, configs, twin_steps, only_twin)
+
+
+def evaluate_scenes(
+    key: int | str,
+    configs: dict[str, SceneConfig],
+    twin_steps: tuple[float, ...],
+    only_twin: bool,
+) -> dict:
+    """Every handled movable part of each scene of ``configs`` (scene name -> config)."""
     ctx = ControlContext()
     parts = []
     t0 = time.perf_counter()
-    for kind in ("drawer", "door"):
-        world = ManipulationWorld(SceneConfig(cabinet_seed=seed, cabinet_kinds=(kind,)))
+    for kind, config in configs.items():
+        world = ManipulationWorld(config)
         spec = world.scene.cabinet_spec
         twins = {f"{dt:g}": PlanningTwin(spec, world.config, ctx, timestep=dt) for dt in twin_steps}
         for part in spec.movable_parts:
@@ -365,7 +388,7 @@ def evaluate_seed(
             rec = evaluate_part(world, twins, spec, part, ctx, only_twin)
             parts.append({"scene": kind, **rec})
         world.close()
-    rec = {"seed": seed, "parts": parts, "seconds": time.perf_counter() - t0}
+    rec = {"seed": key, "parts": parts, "seconds": time.perf_counter() - t0}
     return {**rec, "only": "twin"} if only_twin else rec
 
 

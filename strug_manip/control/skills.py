@@ -73,8 +73,6 @@ from strug_manip.world.sim import ManipulationWorld
 OBJECTS: tuple[str, ...] = ("object",)
 #: A handle is "at" g when its grasp point is this close to g's position [m].
 HANDLE_RADIUS = 0.05
-#: The carcass link of the generated cabinets (PartNet's ``link_0``).
-CARCASS = "link_0"
 #: The object is held when its centre is this close to the TCP [m] (the box's half
 #: diagonal is 0.06 m; a dropped object lies 0.2 m or more away).
 HELD_RADIUS = 0.1
@@ -234,7 +232,8 @@ def _grasp_and_move(
     tol = p.probe_tolerance if name == "probe" else None
     # A probe presses wherever the part lets it (a push into a closed front): the hand
     # may touch the carcass around the part too.
-    probe_touch = touch | {world.scene.cabinet_prefix + CARCASS} if name == "probe" else touch
+    carcass = world.scene.cabinet_prefix + world.scene.cabinet_spec.carcass
+    probe_touch = touch | {carcass} if name == "probe" else touch
     moving = line_of(
         name, poses, speed, touch=probe_touch, holding=True, part_joint=joint, part_q=part_q,
         tolerance=tol,

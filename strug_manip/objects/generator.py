@@ -374,6 +374,10 @@ class CabinetSpec:
         body_inertial: the carcass mass properties.
         parts: one per cell, row-major from the top-left.
         colors: ``{"body": rgba, "front": rgba, "handle": rgba}``.
+        carcass: the carcass link (the generator's ``link_0``; a loaded object's
+            ``furniture_body`` link, :func:`strug_manip.objects.describe.describe_object`).
+        carcass_joint: the fixed joint that holds the carcass on the root ``base``.
+        label: a loaded object's name (its folder); ``""`` for generated cabinets.
     """
 
     seed: int
@@ -392,11 +396,15 @@ class CabinetSpec:
     body_inertial: Inertial
     parts: tuple[PartSpec, ...]
     colors: dict[str, tuple[float, float, float, float]] = field(default_factory=dict)
+    carcass: str = "link_0"
+    carcass_joint: str = "joint_0"
+    label: str = ""
 
     @property
     def name(self) -> str:
-        """A file-system friendly name, e.g. ``cabinet_0042``."""
-        return f"cabinet_{self.seed:04d}"
+        """A file-system friendly name, e.g. ``cabinet_0042`` (a loaded object: its
+        label)."""
+        return self.label or f"cabinet_{self.seed:04d}"
 
     @property
     def mass(self) -> float:

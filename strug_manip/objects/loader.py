@@ -11,9 +11,8 @@
 from __future__ import annotations
 
 import math
-import xml.etree.ElementTree as ET
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 
 import mujoco
@@ -21,7 +20,8 @@ import numpy as np
 import pinocchio as pin
 
 from planners.errors import ConfigError, UnknownNameError
-from strug_manip.objects.generator import JOINT_EFFORT, JOINT_VELOCITY, CabinetSpec
+from strug_manip.objects.conform import conform, flap_stay, is_flap
+from strug_manip.objects.generator import JOINT_EFFORT, JOINT_VELOCITY, TOTAL_MASS, CabinetSpec
 from strug_manip.objects.mjcf import (
     BASE_FRICTION,
     FLOOR_SIZE,
@@ -35,6 +35,7 @@ from strug_manip.objects.urdf import (
     JointInfo,
     LinkInfo,
     ParsedUrdf,
+    joint_tree,
     parse_urdf,
     parse_urdf_text,
 )
@@ -63,6 +64,8 @@ class ArticulatedObject:
         urdf: the parsed URDF (what :func:`add_to_spec` builds from).
         base_friction: sliding friction of the base geoms.
         mass_scale: factor applied to every URDF/estimated mass (``total_mass``).
+        scale: the uniform scale the loader applied to the file's geometry [-].
+        yaw: the turn about ``z`` that brought the file's front to ``+x`` [rad].
     """
 
     name: str
@@ -81,6 +84,8 @@ class ArticulatedObject:
     urdf: ParsedUrdf = field(repr=False)
     base_friction: float = BASE_FRICTION
     mass_scale: float = 1.0
+    scale: float = 1.0
+    yaw: float = 0.0
 
     @property
     def movable_joints(self) -> tuple[JointInfo, ...]:
@@ -183,18 +188,35 @@ def add_to_spec(
     )
 
 
+def kinematic_urdf(urdf: ParsedUrdf) -> str:
+    """The kinematic tree of ``urdf`` as URDF text (links without geometry; every
+    ``<limit>`` with the effort and velocity urdfdom requires)."""
+    out = [f'<robot name="{urdf.name}">']
+    out += [f'<link name="{n}"/>' for n in urdf.links]
+    for j in urdf.joints:
+        T = j.origin
+        rpy = pin.rpy.matrixToRpy(T[:3, :3])
+        body = [
+            f'<origin xyz="{" ".join(fmt_float(v) for v in T[:3, 3])}" '
+            f'rpy="{" ".join(fmt_float(v) for v in rpy)}"/>',
+            f'<parent link="{j.parent}"/><child link="{j.child}"/>',
+        ]
+        if j.movable:
+            body.append(f'<axis xyz="{" ".join(fmt_float(v) for v in j.axis)}"/>')
+        if j.type in ("prismatic", "revolute"):
+            body.append(
+                f'<limit lower="{fmt_float(j.lower)}" upper="{fmt_float(j.upper)}" '
+                f'effort="{fmt_float(JOINT_EFFORT)}" velocity="{fmt_float(JOINT_VELOCITY)}"/>'
+            )
+        out.append(f'<joint name="{j.name}" type="{j.type}">{"".join(body)}</joint>')
+    out.append("</robot>")
+    return "\n".join(out)
+
+
 def _pinocchio(urdf: ParsedUrdf, path: Path) -> pin.Model:
-    """Pinocchio's model of the parsed URDF (from its XML tree, in memory)."""
-    root = urdf.tree.getroot()
-    if urdf.needs_sanitizing:
-        # urdfdom (Pinocchio's parser) requires effort and velocity in every <limit>;
-        # PartNet-Mobility files omit them: fill them in on a copy.
-        root = ET.fromstring(ET.tostring(root))
-        for lim in root.iter("limit"):
-            lim.set("effort", lim.get("effort", fmt_float(JOINT_EFFORT)))
-            lim.set("velocity", lim.get("velocity", fmt_float(JOINT_VELOCITY)))
+    """Pinocchio's model of the (conformed) kinematic tree, built in memory."""
     try:
-        return pin.buildModelFromXML(ET.tostring(root, encoding="unicode"))
+        return pin.buildModelFromXML(kinematic_urdf(urdf))
     except Exception as e:  # urdfdom errors surface as ValueError/RuntimeError
         raise ConfigError(f"malformed URDF {path}: Pinocchio cannot parse it ({e})") from None
 
@@ -228,8 +250,13 @@ def load_articulated_object(
     floor: bool = True,
     base_friction: float = BASE_FRICTION,
     total_mass: float | None = None,
+    scale: float | None = None,
+    cache_dir: Path | None = None,
+    progress: bool = True,
 ) -> ArticulatedObject:
-    """Load a PartNet-Mobility folder (or a ``.urdf`` path) into MuJoCo and Pinocchio.
+    """Load a PartNet-Mobility folder (or a ``.urdf`` path) into MuJoCo and Pinocchio,
+    conformed to the generator's conventions (:mod:`strug_manip.objects.conform`:
+    collision pieces, front to ``+x``, scale, origin, joint signs and dynamics).
 
     Args:
         folder: the object folder holding ``mobility.urdf`` (and optionally
@@ -238,20 +265,40 @@ def load_articulated_object(
         floor: add a floor plane at z = 0 and stand the object on it (lowest collision
             point at z = 0); otherwise the root frame is at the world origin.
         base_friction: sliding friction of the base against the floor.
-        total_mass: if given, rescale every mass so the object weighs this [kg].
+        total_mass: the object's mass [kg]; default: the mass policy (the boards'
+            mass at :data:`~strug_manip.objects.mjcf.SHELL_DENSITY`, brought into the
+            generator's :data:`~strug_manip.objects.generator.TOTAL_MASS` range; a
+            URDF that gives every moving link an ``<inertial>`` keeps its masses).
+        scale: uniform scale; default: the policy of
+            :func:`~strug_manip.objects.conform.policy_scale`.
+        cache_dir: where convex decompositions are cached (default: the user cache).
+        progress: show a progress bar while decomposing concave meshes.
 
     Returns:
         The :class:`ArticulatedObject`.
 
     Raises:
-        ConfigError: one message naming the file and the problem (missing file, bad
-            XML, unknown joint type, undefined link, non-finite number, unreadable mesh).
+        ConfigError: one line naming the file and every problem found (missing file,
+            bad XML, unsupported joint type, undefined link, non-finite number,
+            missing mesh, no movable part), or a bad option.
     """
     path = Path(folder)
     urdf_path = path if path.suffix.lower() == ".urdf" else path / URDF_NAME
     if total_mass is not None and not (math.isfinite(total_mass) and total_mass > 0):
         raise ConfigError(f"total_mass must be a finite number > 0, got {total_mass!r}")
-    urdf = parse_urdf(urdf_path)
+    if scale is not None and not (math.isfinite(scale) and scale > 0):
+        raise ConfigError(f"scale must be a finite number > 0, got {scale!r}")
+    raw = parse_urdf(urdf_path, require_movable=True)
+    conformed = conform(raw, scale=scale, cache_dir=cache_dir, progress=progress)
+    urdf = conformed.urdf
+    model, data = _standalone(urdf, base_friction)
+    mass = float(model.body_mass.sum())
+    if total_mass is None and not all(
+        urdf.links[j.child].mass is not None for j in urdf.joints if j.movable
+    ):
+        total_mass = float(np.clip(mass, *TOTAL_MASS))
+    scaled = 1.0 if total_mass is None else total_mass / mass
+    urdf = _with_flap_stays(urdf, conformed.defaulted, model, data, scaled)
     return _load(
         urdf,
         urdf_path,
@@ -260,7 +307,55 @@ def load_articulated_object(
         floor=floor,
         base_friction=base_friction,
         total_mass=total_mass,
+        scale=conformed.scale,
+        yaw=conformed.yaw,
     )
+
+
+def _standalone(urdf: ParsedUrdf, base_friction: float) -> tuple[mujoco.MjModel, mujoco.MjData]:
+    """The object alone, fixed, joints at 0, kinematics and masses computed."""
+    spec = mujoco.MjSpec()
+    spec.compiler.degree = False
+    build_bodies(
+        spec, urdf, pos=(0, 0, 0), yaw=0.0, free=False, prefix="", base_friction=base_friction
+    )
+    model = compile_spec(spec, Path(urdf.name))
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    return model, data
+
+
+def _with_flap_stays(
+    urdf: ParsedUrdf,
+    defaulted: Sequence[str],
+    model: mujoco.MjModel,
+    data: mujoco.MjData,
+    mass_scale: float,
+) -> ParsedUrdf:
+    """``urdf`` with a friction stay on every flap whose dynamics were defaulted
+    (:func:`~strug_manip.objects.conform.flap_stay`; ``model``/``data``: the object
+    alone, :func:`_standalone`, whose masses are then scaled by ``mass_scale``)."""
+    flaps = [j for j in urdf.joints if j.name in defaulted and is_flap(j)]
+    if not flaps:
+        return urdf
+    friction = {}
+    for j in flaps:
+        b = model.body(j.child).id
+        jid = model.joint(j.name).id
+        lever = data.subtree_com[b] - data.xanchor[jid]
+        lever -= (lever @ data.xaxis[jid]) * data.xaxis[jid]
+        mass = mass_scale * float(model.body_subtreemass[b])
+        friction[j.name] = flap_stay(mass, float(np.linalg.norm(lever)))
+    raw = [
+        {
+            f.name: friction.get(j.name, j.friction) if f.name == "friction" else getattr(j, f.name)
+            for f in fields(JointInfo)
+            if f.name not in ("T_base_joint", "axis_base")
+        }
+        for j in urdf.joints
+    ]
+    joints, children = joint_tree(urdf.root, raw)
+    return replace(urdf, joints=joints, children=children)
 
 
 def _load(
@@ -272,8 +367,11 @@ def _load(
     floor: bool,
     base_friction: float,
     total_mass: float | None = None,
+    scale: float = 1.0,
+    yaw: float = 0.0,
 ) -> ArticulatedObject:
-    """The :class:`ArticulatedObject` of a parsed URDF (``folder`` None: in memory)."""
+    """The :class:`ArticulatedObject` of a parsed URDF (``folder`` None: in memory;
+    ``scale``, ``yaw``: what conforming it did, recorded)."""
     if not math.isfinite(base_friction) or base_friction < 0:
         raise ConfigError(f"base_friction must be a finite number >= 0, got {base_friction!r}")
     pin_model = _pinocchio(urdf, urdf_path)
@@ -324,4 +422,6 @@ def _load(
         urdf=urdf,
         base_friction=base_friction,
         mass_scale=mass_scale,
+        scale=scale,
+        yaw=yaw,
     )

@@ -120,15 +120,20 @@ def build_bodies(
             base_group.add(j.child)
 
     def mesh_name(g: GeometryInfo) -> str:
-        key = (str(g.mesh), g.scale)
+        key = (str(g.mesh), g.scale) if g.vertices is None else ("mem", id(g.vertices))
         if key not in meshes:
-            stem, k = f"{prefix}{g.mesh.stem}", 0  # type: ignore[union-attr]
-            name = stem
+            stem = f"{prefix}{g.mesh.stem if g.mesh is not None else g.name or 'mesh'}"
+            name, k = stem, 0
             while name in existing:
                 k += 1
                 name = f"{stem}_{k}"
             existing.add(name)
-            m = spec.add_mesh(name=name, file=str(g.mesh), scale=list(g.scale))
+            if g.vertices is None:
+                m = spec.add_mesh(name=name, file=str(g.mesh), scale=list(g.scale))
+            else:
+                m = spec.add_mesh(name=name, uservert=g.vertices.ravel().tolist())
+                if g.faces is not None:
+                    m.userface = g.faces.ravel().tolist()
             m.inertia = mujoco.mjtMeshInertia.mjMESH_INERTIA_SHELL
             meshes[key] = name
         return meshes[key]

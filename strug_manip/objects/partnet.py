@@ -85,7 +85,8 @@ def cabinet_urdf(spec: CabinetSpec) -> str:
     """The ``mobility.urdf`` text of a generated cabinet (PartNet-Mobility layout).
 
     ``base`` is an empty root; ``link_0`` (the carcass) hangs on it by the fixed
-    ``joint_0``; each cell's part ``link_k`` hangs on ``link_0`` by ``joint_k``.
+    ``joint_0``; each cell's part ``link_k`` hangs on ``link_0`` by ``joint_k`` (a
+    loaded object's description: its own carcass and joint names).
     """
     materials: dict[tuple[float, ...], str] = {}
     for key, rgba in spec.colors.items():
@@ -103,16 +104,16 @@ def cabinet_urdf(spec: CabinetSpec) -> str:
         f'  <material name="{n}"><color rgba="{_v(c)}"/></material>\n' for c, n in materials.items()
     ]
     out.append('  <link name="base"/>\n')
-    out.append(_link_xml("link_0", spec.body_geoms, spec.body_inertial, materials))
+    out.append(_link_xml(spec.carcass, spec.body_geoms, spec.body_inertial, materials))
     out.append(
-        '  <joint name="joint_0" type="fixed"><origin xyz="0 0 0" rpy="0 0 0"/>'
-        '<parent link="base"/><child link="link_0"/></joint>\n'
+        f'  <joint name="{spec.carcass_joint}" type="fixed"><origin xyz="0 0 0" rpy="0 0 0"/>'
+        f'<parent link="base"/><child link="{spec.carcass}"/></joint>\n'
     )
     for p in spec.parts:
         out.append(_link_xml(p.link, p.geoms, p.inertial, materials))
         body = [
             f'<origin xyz="{_v(p.origin)}" rpy="0 0 0"/>',
-            '<parent link="link_0"/>',
+            f'<parent link="{spec.carcass}"/>',
             f'<child link="{p.link}"/>',
         ]
         if p.movable:
@@ -129,7 +130,7 @@ def cabinet_urdf(spec: CabinetSpec) -> str:
 
 def cabinet_semantics(spec: CabinetSpec) -> str:
     """The ``semantics.txt`` text: ``link_i joint_word label`` per link."""
-    lines = ["link_0 {} {}".format(*SEMANTICS["body"])]
+    lines = [f"{spec.carcass} {' '.join(SEMANTICS['body'])}"]
     lines += [f"{p.link} {SEMANTICS[p.kind][0]} {SEMANTICS[p.kind][1]}" for p in spec.parts]
     return "\n".join(lines) + "\n"
 

@@ -17,8 +17,9 @@ from __future__ import annotations
 import math
 import xml.etree.ElementTree as ET
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import TypeVar
 
 import numpy as np
 
@@ -44,6 +45,11 @@ class GeometryInfo:
         scale: mesh scale, (3,).
         T_link_geom: pose in the link frame, (4, 4).
         rgba: colour (4,) or None.
+        vertices: a mesh given in memory instead of a file (the loader's collision
+            pieces and visual meshes, :mod:`strug_manip.objects.conform`): vertices in
+            the geom frame, scale applied, shape (n, 3) [m]; ``None`` for files.
+        faces: its triangles, shape (m, 3) int, or ``None`` (a convex piece: MuJoCo
+            takes the hull of the vertices).
     """
 
     name: str
@@ -53,13 +59,15 @@ class GeometryInfo:
     scale: tuple[float, float, float]
     T_link_geom: np.ndarray
     rgba: tuple[float, float, float, float] | None
+    vertices: np.ndarray | None = field(default=None, repr=False, compare=False)
+    faces: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     def key(self) -> tuple:
         """Identity of the geometry (shape, size, file, pose), to merge visual+collision."""
         return (
             self.shape,
             tuple(round(s, 9) for s in self.size),
-            str(self.mesh),
+            str(self.mesh) if self.vertices is None else id(self.vertices),
             self.scale,
             tuple(np.round(self.T_link_geom[:3], 9).ravel()),
         )
@@ -150,17 +158,39 @@ def _rpy_matrix(rpy: Sequence[float]) -> np.ndarray:
     )
 
 
+T = TypeVar("T")
+
+
+class _ProblemError(Exception):
+    """One problem of a URDF element (collected by :class:`_Parser`)."""
+
+
 class _Parser:
     """Parses one URDF file; every problem becomes a ConfigError naming the file."""
 
     def __init__(self, path: Path) -> None:
         self.path = path
         self.folder = path.parent
-        self.needs_sanitizing = False
         self.warnings: list[str] = []
+        #: Every problem found so far: the parse goes on past a bad element, so that
+        #: one message lists them all.
+        self.problems: list[str] = []
 
-    def fail(self, problem: str) -> ConfigError:
-        return ConfigError(f"malformed URDF {self.path}: {problem}")
+    def fail(self, problem: str) -> _ProblemError:
+        return _ProblemError(problem)
+
+    def collect(self, parse: Callable[..., T], *args: object) -> T | None:
+        """``parse(*args)``, or ``None`` with its problem recorded."""
+        try:
+            return parse(*args)
+        except (_ProblemError, ConfigError) as e:
+            self.problems.append(str(e))
+            return None
+
+    def check(self) -> None:
+        """Raise the problems found, all in one line naming the file."""
+        if self.problems:
+            raise ConfigError(f"malformed URDF {self.path}: {'; '.join(self.problems)}")
 
     def floats(self, text: str | None, n: int, what: str, default: Sequence[float]) -> tuple:
         if text is None:
@@ -265,9 +295,13 @@ class _Parser:
 
     def link(self, elem: ET.Element, materials: dict) -> LinkInfo:
         name = elem.get("name", "")
-        visuals = [self.geometry(v, name, "visual", materials) for v in elem.findall("visual")]
+        visuals = [
+            self.collect(self.geometry, v, name, "visual", materials)
+            for v in elem.findall("visual")
+        ]
         collisions = [
-            self.geometry(c, name, "collision", materials) for c in elem.findall("collision")
+            self.collect(self.geometry, c, name, "collision", materials)
+            for c in elem.findall("collision")
         ]
         mass = com = inertia = None
         inertial = elem.find("inertial")
@@ -345,8 +379,6 @@ class _Parser:
                 upper = self.scalar(lim, "upper", f"{what} <limit upper>")
                 if lower > upper:
                     raise self.fail(f"{what} <limit> lower {lower} > upper {upper}")
-                if lim.get("effort") is None or lim.get("velocity") is None:
-                    self.needs_sanitizing = True  # urdfdom (Pinocchio) requires both
             dyn = elem.find("dynamics")
             damping = self.scalar(dyn, "damping", f"{what} <dynamics damping>")
             friction = self.scalar(dyn, "friction", f"{what} <dynamics friction>")
@@ -402,8 +434,7 @@ class ParsedUrdf:
         links: link name -> :class:`LinkInfo`, root first.
         joints: every joint, depth first.
         children: link name -> the joints whose parent it is.
-        needs_sanitizing: some ``<limit>`` lacks effort/velocity (urdfdom rejects it).
-        tree: the XML tree; warnings: what was skipped.
+        warnings: what was skipped.
     """
 
     name: str
@@ -411,16 +442,18 @@ class ParsedUrdf:
     links: dict[str, LinkInfo]
     joints: tuple[JointInfo, ...]
     children: dict[str, list[JointInfo]]
-    needs_sanitizing: bool
-    tree: ET.ElementTree
     warnings: tuple[str, ...]
 
 
-def parse_urdf(urdf_path: Path) -> ParsedUrdf:
+def parse_urdf(urdf_path: Path, *, require_movable: bool = False) -> ParsedUrdf:
     """Parse and validate a URDF (and the ``semantics.txt`` next to it, if any).
 
+    Args:
+        urdf_path: the file.
+        require_movable: an object without a movable joint is a problem too.
+
     Raises:
-        ConfigError: one message naming the file and the problem.
+        ConfigError: one line naming the file and every problem found.
     """
     urdf_path = Path(urdf_path)
     if not urdf_path.is_file():
@@ -429,8 +462,10 @@ def parse_urdf(urdf_path: Path) -> ParsedUrdf:
     try:
         tree = ET.parse(urdf_path)
     except ET.ParseError as e:
-        raise p.fail(f"not valid XML ({e})") from None
-    return _parse_tree(p, tree, lambda links: _read_semantics(urdf_path.parent, links))
+        raise ConfigError(f"malformed URDF {urdf_path}: not valid XML ({e})") from None
+    return _parse_tree(
+        p, tree, lambda links: _read_semantics(urdf_path.parent, links), require_movable
+    )
 
 
 def parse_urdf_text(urdf: str, semantics: str = "", *, path: str | Path = URDF_NAME) -> ParsedUrdf:
@@ -450,78 +485,100 @@ def parse_urdf_text(urdf: str, semantics: str = "", *, path: str | Path = URDF_N
     try:
         tree = ET.ElementTree(ET.fromstring(urdf))
     except ET.ParseError as e:
-        raise p.fail(f"not valid XML ({e})") from None
+        raise ConfigError(f"malformed URDF {path}: not valid XML ({e})") from None
     return _parse_tree(p, tree, lambda links: _parse_semantics(semantics, path, links))
 
 
 def _parse_tree(
-    p: _Parser, tree: ET.ElementTree, read_semantics: Callable[[dict], dict]
+    p: _Parser,
+    tree: ET.ElementTree,
+    read_semantics: Callable[[dict], dict],
+    require_movable: bool = False,
 ) -> ParsedUrdf:
-    urdf_path = p.path
     root_elem = tree.getroot()
     if root_elem.tag != "robot":
-        raise p.fail(f"the root element is <{root_elem.tag}>, expected <robot>")
-    materials = p.materials(root_elem)
+        raise ConfigError(
+            f"malformed URDF {p.path}: the root element is <{root_elem.tag}>, expected <robot>"
+        )
+    materials = p.collect(p.materials, root_elem) or {}
     links: dict[str, LinkInfo] = {}
     for elem in root_elem.findall("link"):
         name = elem.get("name")
         if not name:
-            raise p.fail("a <link> has no name")
-        if name in links:
-            raise p.fail(f"link {name!r} is defined twice")
-        links[name] = p.link(elem, materials)
+            p.problems.append("a <link> has no name")
+        elif name in links:
+            p.problems.append(f"link {name!r} is defined twice")
+        else:
+            link = p.collect(p.link, elem, materials)
+            if link is not None:
+                links[name] = link
     if not links:
-        raise p.fail("no <link> defined")
-    raw = [p.joint(e, links) for e in root_elem.findall("joint")]
+        p.problems.append("no <link> defined")
+        p.check()
+    raw = [p.collect(p.joint, e, links) for e in root_elem.findall("joint")]
     seen, parent_of = set(), {}
     for j in raw:
+        if j is None:
+            continue
         if j["name"] in seen:
-            raise p.fail(f"joint {j['name']!r} is defined twice")
+            p.problems.append(f"joint {j['name']!r} is defined twice")
+        elif j["child"] in parent_of:
+            p.problems.append(f"link {j['child']!r} is the child of two joints")
+        else:
+            parent_of[j["child"]] = j
         seen.add(j["name"])
-        if j["child"] in parent_of:
-            raise p.fail(f"link {j['child']!r} is the child of two joints")
-        parent_of[j["child"]] = j
     roots = [n for n in links if n not in parent_of]
     if len(roots) != 1:
-        raise p.fail(f"expected exactly one root link, found {len(roots)}: {roots}")
-    semantics = read_semantics(links)
+        p.problems.append(f"expected exactly one root link, found {len(roots)}: {roots}")
+    if require_movable and not any(j is not None and j["type"] != "fixed" for j in raw):
+        p.problems.append("no movable part (every joint is fixed)")
+    semantics = p.collect(read_semantics, links) or {}
+    p.check()
     for n, (word, label) in semantics.items():
         links[n] = replace(links[n], semantic_type=word, semantic=label)
-    # Tree order (depth first from the root), with each joint's pose in the root frame.
-    by_parent: dict[str, list[dict]] = {}
+    for j in parent_of.values():
+        j["semantic_type"], j["semantic"] = semantics.get(j["child"], ("", ""))
+    joints, children = joint_tree(roots[0], list(parent_of.values()))
+    order = [roots[0], *(j.child for j in joints)]
+    if len(order) != len(links):
+        loose = sorted(set(links) - set(order))
+        p.problems.append(f"links {loose} are not connected to the root {roots[0]!r} (a cycle?)")
+        p.check()
+    return ParsedUrdf(
+        name=root_elem.get("name", p.path.parent.name),
+        root=roots[0],
+        links={n: links[n] for n in order},
+        joints=joints,
+        children=children,
+        warnings=tuple(p.warnings),
+    )
+
+
+def joint_tree(
+    root: str, raw: Sequence[Mapping]
+) -> tuple[tuple[JointInfo, ...], dict[str, list[JointInfo]]]:
+    """Joints in tree order (depth first from ``root``) with their poses in the root
+    frame, and each link's child joints.
+
+    Args:
+        root: the root link.
+        raw: one mapping per joint with :class:`JointInfo`'s fields but the last two
+            (``T_base_joint``, ``axis_base``, computed here).
+    """
+    by_parent: dict[str, list[Mapping]] = {}
     for j in raw:
         by_parent.setdefault(j["parent"], []).append(j)
     joints: list[JointInfo] = []
-    children: dict[str, list[JointInfo]] = {n: [] for n in links}
-    order = [roots[0]]
+    children: dict[str, list[JointInfo]] = {root: []}
 
     def visit(link: str, T_base_link: np.ndarray) -> None:
         for j in by_parent.get(link, []):
             T = T_base_link @ j["origin"]
-            sem_type, sem = semantics.get(j["child"], ("", ""))
-            info = JointInfo(
-                **j,
-                semantic=sem,
-                semantic_type=sem_type,
-                T_base_joint=T,
-                axis_base=T[:3, :3] @ j["axis"],
-            )
+            info = JointInfo(**j, T_base_joint=T, axis_base=T[:3, :3] @ j["axis"])
             joints.append(info)
             children[link].append(info)
-            order.append(j["child"])
+            children[j["child"]] = []
             visit(j["child"], T)
 
-    visit(roots[0], np.eye(4))
-    if len(order) != len(links):
-        loose = sorted(set(links) - set(order))
-        raise p.fail(f"links {loose} are not connected to the root {roots[0]!r} (a cycle?)")
-    return ParsedUrdf(
-        name=root_elem.get("name", urdf_path.parent.name),
-        root=roots[0],
-        links={n: links[n] for n in order},
-        joints=tuple(joints),
-        children=children,
-        needs_sanitizing=p.needs_sanitizing,
-        tree=tree,
-        warnings=tuple(p.warnings),
-    )
+    visit(root, np.eye(4))
+    return tuple(joints), children

@@ -43,6 +43,7 @@ from strug_manip.objects import (
     load_articulated_object,
     load_cabinet_spec,
 )
+from strug_manip.objects.describe import describe_object
 from strug_manip.robot.fetch import FETCH_SCENE_XML, GRIPPER_JOINTS, HOME_KEYFRAME
 from strug_manip.world.floating_gripper import add_floating_gripper
 
@@ -232,8 +233,8 @@ def build_scene(config: SceneConfig) -> SceneModel:
     """Build the scene of ``config``, in memory (a generated or given cabinet is never
     written to disk; a ``cabinet_folder`` is read from it)."""
     if config.cabinet_folder is not None:
-        cab_spec = None
         cabinet = load_articulated_object(Path(config.cabinet_folder))
+        cab_spec = describe_object(cabinet)
     else:
         cab_spec = config.cabinet_spec
         if cab_spec is None:
@@ -298,8 +299,8 @@ def build_scene(config: SceneConfig) -> SceneModel:
     # The cabinet faces the robot: its +x (front) points to -x of the world.
     yaw = math.pi
     if config.stand_height > 0:
-        # Our cabinets' front plane is x = depth / 2; a loaded folder's is its bounds.
-        front = cab_spec.depth / 2 if cab_spec is not None else float(cabinet.bounds[1, 0])
+        # The object frame's origin is the footprint's centre (generated and loaded).
+        front = cab_spec.depth / 2
         x = config.cabinet_distance + STAND_SETBACK + front
         pos = [x, config.cabinet_lateral, config.stand_height]
         size = cabinet.bounds[1, :2] - cabinet.bounds[0, :2]

@@ -162,13 +162,14 @@ class ManipulationWorld:
         (a belief particle: see :func:`strug_manip.objects.hypotheses.believed_spec`).
 
         Raises:
-            ConfigError: ``spec`` is not a :class:`CabinetSpec`, or ``config`` names a
-                cabinet folder.
+            ConfigError: ``spec`` is not a :class:`CabinetSpec`.
         """
         base = config or SceneConfig()
-        if base.cabinet_folder is not None:
-            raise ConfigError("a world from a cabinet spec cannot also load cabinet_folder")
-        return cls(dataclasses.replace(base, cabinet_spec=spec), render_context)
+        # The spec replaces the config's cabinet, generated or loaded from a folder (a
+        # belief particle of a real object's scene).
+        return cls(
+            dataclasses.replace(base, cabinet_spec=spec, cabinet_folder=None), render_context
+        )
 
     # --- state -------------------------------------------------------------------------
     def reset(self, part_positions: dict[str, float] | None = None) -> None:
