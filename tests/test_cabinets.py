@@ -14,7 +14,12 @@ import pytest
 from planners.errors import ConfigError, PlannersError, UnknownNameError
 from strug_manip.objects import generator as gen
 from strug_manip.objects.generator import PartSpec, generate_cabinet
-from strug_manip.objects.loader import ArticulatedObject, add_to_spec, load_articulated_object
+from strug_manip.objects.loader import (
+    ArticulatedObject,
+    add_to_spec,
+    load_articulated_object,
+    load_cabinet_spec,
+)
 from strug_manip.objects.partnet import cabinet_urdf, write_partnet
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "models" / "cabinets"
@@ -411,9 +416,10 @@ def test_a_partnet_style_object_loads_and_stands_on_the_floor(partnet_folder: Pa
     data = mujoco.MjData(m)
     mujoco.mj_kinematics(m, data)
     # joint_1 turns the y-up body (0.6 m along its y) z-up; the lid (0.02 m thick, centred
-    # 0.3 m up) adds 0.01 m; the object is lifted so its lowest point is on the floor.
-    assert obj.bounds[:, 2] == pytest.approx([-0.3, 0.31], abs=1e-6)
-    assert data.body("base").xpos[2] == pytest.approx(0.3, abs=1e-6)  # float32 meshes
+    # 0.3 m up) adds 0.01 m; conforming puts the origin on the body's bottom.
+    assert obj.scale == 1.0  # 0.5 x 0.4 x 0.6 m lies in the generator's ranges
+    assert obj.bounds[:, 2] == pytest.approx([0.0, 0.61], abs=1e-6)
+    assert data.body("base").xpos[2] == pytest.approx(0.0, abs=1e-6)  # float32 meshes
     for _ in range(500):
         mujoco.mj_step(m, data)
     assert _warnings(data) == 0 and np.all(np.isfinite(data.qpos))
@@ -528,8 +534,12 @@ def test_a_malformed_semantics_file_is_named(tmp_path: Path) -> None:
 
 
 def test_shelf_only_cabinets_have_no_joints(tmp_path: Path) -> None:
-    obj = load_articulated_object(write_partnet(generate_cabinet(2, kinds=("shelf",)), tmp_path))
+    spec = generate_cabinet(2, kinds=("shelf",))
+    obj = load_cabinet_spec(spec)  # in memory, as the Shelf task builds it
     assert obj.pin_model.nq == 0 and obj.mj_model.nv == 6 and not obj.movable_joints
+    # A folder is an object to act on: one without a movable part is refused.
+    with pytest.raises(ConfigError, match="no movable part"):
+        load_articulated_object(write_partnet(spec, tmp_path))
     assert {li.semantic for li in obj.links.values()} == {"", "furniture_body", "shelf"}
 
 

@@ -24,7 +24,8 @@ doors are closed at their *upper* limit. :func:`conform` rewrites a
   largest at which none exceeds its maximum: the object then stands on the cabinet
   table within the Fetch's reach, as every generated cabinet does. ``scale=``
   overrides it.
-- **Origin**: on the bottom plane at the centre of the footprint.
+- **Origin**: on the carcass's bottom at the centre of its footprint (a file already
+  so, within :data:`ORIGIN_SLACK`, keeps its own).
 - **Joints**: positive positions open (a joint closed at its upper limit gets its axis
   and limits negated); where the URDF gives no ``<dynamics>``, the middle of the
   generator's ranges (:data:`DRAWER_DAMPING_DEFAULT` ...; a flap's friction stay is
@@ -76,6 +77,12 @@ FLAP_AXIS_COS = math.cos(math.radians(45.0))
 SCALE_BOUNDS = (0.05, 5.0)
 #: The generator's size ranges [m] in object-frame order (x: depth, y: width, z: height).
 SIZE_RANGES = np.array([DEPTH_RANGE, WIDTH_RANGE, HEIGHT_RANGE])
+#: Relative slack on those ranges: a carcass within 5 % of them (glides, mouldings, a
+#: generated cabinet's own feet) is left at its size.
+SIZE_SLACK = 0.05
+#: A file whose carcass is already centred on its origin and stands on it within this
+#: [m] keeps its origin (a generated cabinet's glides reach 6 mm below its frame).
+ORIGIN_SLACK = 0.01
 
 
 @dataclass(frozen=True)
@@ -213,11 +220,12 @@ def front_yaw(urdf: ParsedUrdf) -> float:
 
 
 def policy_scale(size_xyz: np.ndarray) -> float:
-    """The automatic scale (module docstring) of an object of extents ``size_xyz`` =
-    (depth, width, height) [m] in the object frame."""
+    """The automatic scale (module docstring) of an object whose carcass has extents
+    ``size_xyz`` = (depth, width, height) [m] in the object frame (within
+    :data:`SIZE_SLACK` of the ranges counts as inside)."""
     size = np.maximum(np.asarray(size_xyz, dtype=float), 1e-6)
-    s_min = float(np.max(SIZE_RANGES[:, 0] / size))
-    s_max = float(np.min(SIZE_RANGES[:, 1] / size))
+    s_min = float(np.max((1.0 - SIZE_SLACK) * SIZE_RANGES[:, 0] / size))
+    s_max = float(np.min((1.0 + SIZE_SLACK) * SIZE_RANGES[:, 1] / size))
     s = min(max(1.0, s_min), s_max) if s_min <= s_max else s_max
     return float(np.clip(s, *SCALE_BOUNDS))
 
@@ -296,10 +304,17 @@ def conform(
     poses = link_poses(pieced)
     pts = np.concatenate([_transform(R, link_points(pieced, n, poses[n])) for n in links])
     lo, hi = pts.min(axis=0), pts.max(axis=0)
-    s = policy_scale(hi - lo) if scale is None else float(scale)
+    moving = {n for j in pieced.joints if j.movable for n in moving_subtree(pieced, j)}
+    body = [_transform(R, link_points(pieced, n, poses[n])) for n in links if n not in moving]
+    body_pts = np.concatenate(body) if any(len(b) for b in body) else pts
+    size = body_pts.max(axis=0) - body_pts.min(axis=0)
+    s = policy_scale(size) if scale is None else float(scale)
     # The root's new frame: rotated, then moved so the scaled footprint is centred on
     # the origin and the lowest point on z = 0.
-    offset = np.array([(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, lo[2]])
+    blo, bhi = body_pts.min(axis=0), body_pts.max(axis=0)
+    offset = np.array([(blo[0] + bhi[0]) / 2, (blo[1] + bhi[1]) / 2, blo[2]])
+    if np.all(np.abs(offset) <= ORIGIN_SLACK):
+        offset[:] = 0.0  # already in the object frame (e.g. a generated cabinet's folder)
     T_root = R.copy()
     T_root[:3, 3] = -offset
     new_links = {
