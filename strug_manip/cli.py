@@ -38,7 +38,7 @@ from strug_manip.cli_args import (
     positive_int,
     positive_seconds,
 )
-from strug_manip.domains import DOMAIN_SUMMARIES, DOMAINS, make_domain
+from strug_manip.domains import DOMAIN_SUMMARIES, DOMAINS, MANIPULATION_DOMAINS, make_domain
 from strug_manip.experiments.bench import (
     RESULTS,
     BenchSpec,
@@ -50,6 +50,7 @@ from strug_manip.experiments.bench import (
 from strug_manip.experiments.episode import DEFAULT_PARTICLES, StepRecord, run_episode
 from strug_manip.experiments.executors import EXECUTORS
 from strug_manip.experiments.table import to_markdown
+from strug_manip.objects.loader import object_folders
 
 #: The demo: a short Table I run of the toy domains.
 DEMO_DOMAINS = ("tiger", "extendedtiger", "lightdark1d", "lightdark2d")
@@ -131,6 +132,16 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--seed", type=nonnegative_int, default=0, help="episode seed (default 0)")
     run.add_argument("--json", action="store_true", help="one JSON object per line per step")
     run.add_argument(
+        "--object",
+        type=Path,
+        default=None,
+        help="a PartNet-Mobility object folder to act on (manipulation tasks; default: a "
+        "generated cabinet)",
+    )
+    run.add_argument(
+        "--target", default=None, help="the target part's link (e.g. link_1), with --object"
+    )
+    run.add_argument(
         "--rerun",
         type=Path,
         metavar="FILE.rrd",
@@ -149,6 +160,13 @@ def build_parser() -> argparse.ArgumentParser:
         help="seeds are FIRST..FIRST+N-1 (default 0): report on a range no tuning used",
     )
     bench.add_argument("--out", type=Path, required=True, help="output directory")
+    bench.add_argument(
+        "--objects",
+        type=Path,
+        default=None,
+        help="a folder of PartNet-Mobility object folders: the manipulation tasks act on "
+        "them (each episode's seed draws one and its target)",
+    )
     bench.add_argument(
         "--workers",
         type=positive_int,
@@ -170,8 +188,11 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     _add_budget(bench)
 
-    scene = sub.add_parser("scene", help="picture Fetch in front of a generated cabinet")
+    scene = sub.add_parser("scene", help="picture Fetch in front of a cabinet")
     scene.add_argument("--seed", type=nonnegative_int, default=3, help="cabinet generator seed")
+    scene.add_argument(
+        "--object", type=Path, default=None, help="a PartNet-Mobility object folder instead"
+    )
     scene.add_argument(
         "--kinds", default="drawer,door,shelf,panel", help="part kinds the generator may use"
     )
@@ -251,7 +272,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         output_file(args.rerun, "--rerun", (".rrd",))
     overrides = _overrides(args)
     BenchSpec((args.domain,), (args.solver,), 1, overrides, args.particles)  # validates
-    pomdp = make_domain(args.domain)
+    pomdp = make_domain(args.domain, **_object_params(args))
     config = solver_config(args.solver, budget_for(args.domain, overrides))
     if not args.json:
         print(f"{args.domain} / {args.solver} / seed {args.seed}: {describe_config(config, pomdp)}")
@@ -285,6 +306,20 @@ def cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _object_params(args: argparse.Namespace) -> dict[str, Any]:
+    """The domain parameters of ``--object`` and ``--target`` (manipulation tasks)."""
+    if args.object is None:
+        if args.target is not None:
+            raise ConfigError("--target names a part of --object; add --object DIR")
+        return {}
+    if args.domain not in MANIPULATION_DOMAINS:
+        raise ConfigError(
+            f"--object is for the manipulation tasks ({', '.join(MANIPULATION_DOMAINS)}), "
+            f"not {args.domain!r}"
+        )
+    return {"objects": (args.object,), "target_link": args.target}
+
+
 def cmd_bench(args: argparse.Namespace) -> int:
     if args.address is not None and args.executor != "ray":
         raise ConfigError("--address is for --executor ray; add --executor ray")
@@ -295,6 +330,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
         _overrides(args),
         args.particles,
         args.first_seed,
+        () if args.objects is None else tuple(str(p) for p in object_folders(args.objects)),
     )
     output_dir(args.out, "--out")
     summary = run_bench(
@@ -320,7 +356,11 @@ def cmd_scene(args: argparse.Namespace) -> int:
     from strug_manip.world import ManipulationWorld, SceneConfig
 
     output_file(args.out, "--out", (".png", ".jpg", ".jpeg"))
-    world = ManipulationWorld(SceneConfig(cabinet_seed=args.seed, cabinet_kinds=_split(args.kinds)))
+    if args.object is not None:
+        world = ManipulationWorld(SceneConfig(cabinet_folder=object_folders(args.object)[0]))
+    else:
+        config = SceneConfig(cabinet_seed=args.seed, cabinet_kinds=_split(args.kinds))
+        world = ManipulationWorld(config)
     try:
         try:
             world.camera_pose(args.camera)
@@ -331,14 +371,12 @@ def cmd_scene(args: argparse.Namespace) -> int:
         if not cv2.imwrite(str(args.out), rgb[:, :, ::-1]):
             raise ConfigError(f"--out {args.out}: could not write the image")
         spec = world.scene.cabinet_spec
-        if spec:
-            parts = ", ".join(
-                f"{p.link} {p.kind}" + (f" ({p.hinge} hinge)" if p.hinge else "")
-                for p in spec.parts
-            )
-            print(f"cabinet seed {args.seed} ({spec.mass:.1f} kg): {parts}")
-        else:
-            print(f"loaded from {world.config.cabinet_folder}")
+        parts = ", ".join(
+            f"{p.link} {p.kind}" + (f" ({p.hinge} hinge)" if p.hinge else "") for p in spec.parts
+        )
+        what = f"cabinet seed {args.seed}" if args.object is None else f"object {spec.name}"
+        size = f"{spec.depth:.2f} x {spec.width:.2f} x {spec.height:.2f} m"
+        print(f"{what} ({size}, {spec.mass:.1f} kg): {parts}")
         print(f"wrote {args.out}")
     finally:
         world.close()

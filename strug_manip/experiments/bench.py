@@ -33,6 +33,7 @@ from strug_manip.domains import (
 from strug_manip.experiments.episode import DEFAULT_PARTICLES, run_episode
 from strug_manip.experiments.executors import EXECUTORS, run_local, run_ray
 from strug_manip.experiments.table import summarize, to_markdown, write_csv, write_png
+from strug_manip.objects.loader import object_folders
 
 RESULTS = "results.jsonl"
 SETTINGS = "run.json"
@@ -50,6 +51,8 @@ class BenchSpec:
             (e.g. ``{"sims": 2000}``); a field no chosen solver has is an error.
         n_particles: belief size.
         first_seed: the first seed (a range no tuning used, e.g. to report on).
+        objects: real object folders (PartNet-Mobility) the manipulation tasks act on
+            instead of generated cabinets; each episode's seed draws one and its target.
     """
 
     domains: tuple[str, ...]
@@ -58,6 +61,7 @@ class BenchSpec:
     overrides: dict[str, Any] = field(default_factory=dict)
     n_particles: int = DEFAULT_PARTICLES
     first_seed: int = 0
+    objects: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         if not self.domains:
@@ -72,6 +76,8 @@ class BenchSpec:
         check_positive_int("seeds", self.seeds)
         check_positive_int("n_particles", self.n_particles)
         check_positive_int("first_seed", self.first_seed, allow_zero=True)
+        for o in self.objects:
+            object_folders(o)  # names a missing folder now, not in a worker
         for s in self.solvers:  # validate every config once, up front
             solver_config(s, self.overrides)
         fields = {f for s in self.solvers for f in SOLVERS[s].field_names()}
@@ -81,7 +87,8 @@ class BenchSpec:
 
     def settings(self) -> dict[str, Any]:
         """What must match for two runs to share a results file."""
-        return {"overrides": self.overrides, "n_particles": self.n_particles}
+        out = {"overrides": self.overrides, "n_particles": self.n_particles}
+        return {**out, "objects": list(self.objects)} if self.objects else out
 
     def tasks(self) -> list[tuple[str, str, int]]:
         """Every (domain, solver, seed), seeds innermost-last so early rows fill first."""
@@ -109,15 +116,22 @@ def budget_for(domain: str, overrides: dict[str, Any]) -> dict[str, Any]:
     return out
 
 
-def run_task(task: tuple[str, str, int], overrides: dict[str, Any], n_particles: int) -> dict:
+def run_task(
+    task: tuple[str, str, int],
+    overrides: dict[str, Any],
+    n_particles: int,
+    objects: tuple[str, ...] = (),
+) -> dict:
     """Run one episode and return its result record (executed in a worker).
 
     Every record has the return, the steps, the wall time, the mean simulations and the
     median planning time per step [s]; a manipulation episode's also ``success`` (the
     +10: the object rests in the target part) and the domain's report (where the time
-    went, the outcome cache's hit rate)."""
+    went, the outcome cache's hit rate). ``objects``: real object folders the
+    manipulation tasks act on (:attr:`BenchSpec.objects`)."""
     domain, solver, seed = task
-    pomdp = make_domain(domain)
+    on_objects = bool(objects) and domain in MANIPULATION_DOMAINS
+    pomdp = make_domain(domain, objects=objects) if on_objects else make_domain(domain)
     result = run_episode(
         pomdp, solver_config(solver, budget_for(domain, overrides)), seed, n_particles=n_particles
     )
@@ -253,12 +267,12 @@ def run_bench(
         if not todo:
             pass
         elif executor == "ray":
-            run_ray(todo, spec.overrides, spec.n_particles, workers, record, address)
+            run_ray(todo, spec.overrides, spec.n_particles, workers, record, address, spec.objects)
         elif workers == 1:
             for task in todo:
-                record(run_task(task, spec.overrides, spec.n_particles))
+                record(run_task(task, spec.overrides, spec.n_particles, spec.objects))
         else:
-            run_local(todo, spec.overrides, spec.n_particles, workers, record)
+            run_local(todo, spec.overrides, spec.n_particles, workers, record, spec.objects)
     bar.close()
     wanted_set = set(wanted)
     mine = [r for r in records if (r["domain"], r["solver"], r["seed"]) in wanted_set]

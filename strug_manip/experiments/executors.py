@@ -42,10 +42,16 @@ RAY_OBJECT_STORE = 256 * 1024**2
 
 
 def run_local(
-    todo: Sequence[Task], overrides: dict[str, Any], n_particles: int, workers: int, record: Record
+    todo: Sequence[Task],
+    overrides: dict[str, Any],
+    n_particles: int,
+    workers: int,
+    record: Record,
+    objects: Sequence[str] = (),
 ) -> None:
-    """Run ``todo`` in ``workers`` local processes, one task in flight each."""
-    procs = [_start_worker(overrides, n_particles) for _ in range(workers)]
+    """Run ``todo`` in ``workers`` local processes, one task in flight each
+    (``objects``: real object folders, as :func:`~strug_manip.experiments.bench.run_task`)."""
+    procs = [_start_worker(overrides, n_particles, objects) for _ in range(workers)]
     sel = selectors.DefaultSelector()
     queue, busy = list(reversed(todo)), 0
     try:
@@ -71,10 +77,13 @@ def run_local(
     _stop(procs, grace=2.0)
 
 
-def _start_worker(overrides: dict[str, Any], n_particles: int) -> subprocess.Popen:
+def _start_worker(
+    overrides: dict[str, Any], n_particles: int, objects: Sequence[str]
+) -> subprocess.Popen:
     cmd = [sys.executable, "-m", "strug_manip.experiments.executors", str(os.getpid())]
     proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
-    proc.stdin.write(json.dumps({"overrides": overrides, "n_particles": n_particles}) + "\n")
+    setup = {"overrides": overrides, "n_particles": n_particles, "objects": list(objects)}
+    proc.stdin.write(json.dumps(setup) + "\n")
     return proc
 
 
@@ -118,10 +127,12 @@ def run_ray(
     workers: int,
     record: Record,
     address: str | None = None,
+    objects: Sequence[str] = (),
 ) -> None:
     """Run ``todo`` as Ray tasks, at most ``2 * workers`` in flight (``ray.wait``).
 
     Args:
+        objects: real object folders (:func:`~strug_manip.experiments.bench.run_task`).
         address: a Ray cluster to join (e.g. ``"ray://head:10001"`` or ``"auto"``);
             ``None`` starts a local instance with ``workers`` CPUs. Cluster nodes need
             strug-manip (and a user domain's module) installed.
@@ -152,7 +163,7 @@ def run_ray(
         queue, pending = list(reversed(todo)), []
         while queue or pending:
             while queue and len(pending) < 2 * workers:
-                pending.append(remote.remote(queue.pop(), overrides, n_particles))
+                pending.append(remote.remote(queue.pop(), overrides, n_particles, objects))
             done, pending = ray.wait(pending, num_returns=1)
             for ref in done:
                 record(_ray_result(ray, ref))
@@ -212,7 +223,9 @@ def _serve(requests: IO[str], replies: IO[str]) -> None:
         task = tuple(json.loads(line))
         try:
             reply: dict[str, Any] = {
-                "record": run_task(task, setup["overrides"], setup["n_particles"])
+                "record": run_task(
+                    task, setup["overrides"], setup["n_particles"], tuple(setup["objects"])
+                )
             }
         except Exception as exc:
             import traceback

@@ -302,11 +302,10 @@ def conform(
     R = np.eye(4)
     R[:2, :2] = [[math.cos(yaw), -math.sin(yaw)], [math.sin(yaw), math.cos(yaw)]]
     poses = link_poses(pieced)
-    pts = np.concatenate([_transform(R, link_points(pieced, n, poses[n])) for n in links])
-    lo, hi = pts.min(axis=0), pts.max(axis=0)
     moving = {n for j in pieced.joints if j.movable for n in moving_subtree(pieced, j)}
-    body = [_transform(R, link_points(pieced, n, poses[n])) for n in links if n not in moving]
-    body_pts = np.concatenate(body) if any(len(b) for b in body) else pts
+    # The carcass decides scale and origin (handles and fronts standing proud do not).
+    carcass = [n for n in links if n not in moving] or list(links)
+    body_pts = np.concatenate([_transform(R, link_points(pieced, n, poses[n])) for n in carcass])
     size = body_pts.max(axis=0) - body_pts.min(axis=0)
     s = policy_scale(size) if scale is None else float(scale)
     # The root's new frame: rotated, then moved so the scaled footprint is centred on

@@ -339,7 +339,7 @@ def describe_object(obj: ArticulatedObject) -> CabinetSpec:
         colors=rgba,
         carcass=carcass[0],
         carcass_joint=carcass[1],
-        label=obj.name,
+        label=obj.folder.name if obj.folder is not None else obj.name,
     )
 
 

@@ -221,6 +221,24 @@ def _pinocchio(urdf: ParsedUrdf, path: Path) -> pin.Model:
         raise ConfigError(f"malformed URDF {path}: Pinocchio cannot parse it ({e})") from None
 
 
+def object_folders(path: str | Path) -> tuple[Path, ...]:
+    """The object folders at ``path``: itself if it holds a ``mobility.urdf``, else its
+    subfolders that do (sorted by name), e.g. a folder of downloaded objects.
+
+    Raises:
+        ConfigError: ``path`` is not a folder, or holds no object.
+    """
+    path = Path(path)
+    if not path.is_dir():
+        raise ConfigError(f"object folder {path} not found")
+    if (path / URDF_NAME).is_file():
+        return (path,)
+    found = tuple(sorted(p for p in path.iterdir() if (p / URDF_NAME).is_file()))
+    if not found:
+        raise ConfigError(f"{path} holds no object: no {URDF_NAME} in it or its subfolders")
+    return found
+
+
 def load_cabinet_spec(
     spec: CabinetSpec,
     *,

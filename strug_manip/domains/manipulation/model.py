@@ -40,6 +40,7 @@ import math
 import time
 from collections.abc import Hashable, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -92,6 +93,7 @@ from strug_manip.domains.manipulation.state import (
 from strug_manip.domains.manipulation.worlds import ParticleWorlds, Timers
 from strug_manip.objects.generator import CabinetSpec, PartSpec
 from strug_manip.objects.hypotheses import BelievedJoint
+from strug_manip.objects.loader import object_folders
 from strug_manip.robot.fetch import BASE_JOINTS, GRIPPER_SITE
 from strug_manip.world.scene import SceneConfig
 from strug_manip.world.sim import OBJECT_JOINT, CameraFrame, ManipulationWorld, WorldState
@@ -242,6 +244,11 @@ class ManipulationPOMDP(GenerativePOMDP):
         views: head-camera views for perception (1..6).
         max_steps: the episode's step limit (default the paper's :data:`MAX_STEPS`;
             fewer for quick checks).
+        objects: real articulated objects (PartNet-Mobility folders) to act on instead
+            of generated cabinets; the episode's seed draws one
+            (:func:`~strug_manip.objects.loader.object_folders` lists a folder's).
+        target_link: the target part by its link name (``link_2``), instead of
+            ``target``.
 
     Raises:
         ConfigError, UnknownNameError: a bad argument, naming it.
@@ -266,8 +273,16 @@ class ManipulationPOMDP(GenerativePOMDP):
         probes: Sequence[str] = DEFAULT_PROBES,
         views: int = VIEWS,
         max_steps: int = MAX_STEPS,
+        objects: Sequence[str | Path] = (),
+        target_link: str | None = None,
     ) -> None:
         self.max_steps = check_positive_int("max_steps", max_steps)
+        self.objects = tuple(p for o in objects for p in object_folders(o))
+        if self.objects and cabinet_seed is not None:
+            raise ConfigError("give cabinet_seed or objects, not both")
+        if target_link is not None and target is not None:
+            raise ConfigError("give target or target_link, not both")
+        self.target_link = target_link
         if cabinet_seed is not None:
             check_positive_int("cabinet_seed", cabinet_seed, allow_zero=True)
         self.cabinet_seed = cabinet_seed
@@ -460,14 +475,18 @@ class ManipulationPOMDP(GenerativePOMDP):
         """A new real cabinet and its target (module docstring)."""
         self.close()
         t0 = time.perf_counter()
-        drawn = self.cabinet_seed is None and self.target is None
+        drawn = self.cabinet_seed is None and self.target is None and self.target_link is None
         for attempt in range(MAX_DRAWS if drawn else 1):
             seed = self.cabinet_seed
-            if seed is None:
-                seed = EPISODE_SEEDS.start + int(rng.integers(len(EPISODE_SEEDS)))
-            world = ManipulationWorld(
-                SceneConfig(cabinet_seed=seed, cabinet_kinds=TASK_KINDS[self.task])
-            )
+            if self.objects:  # a real object: the seed draws which
+                seed = -1
+                folder = self.objects[int(rng.integers(len(self.objects)))]
+                config = SceneConfig(cabinet_folder=folder)
+            else:
+                if seed is None:
+                    seed = EPISODE_SEEDS.start + int(rng.integers(len(EPISODE_SEEDS)))
+                config = SceneConfig(cabinet_seed=seed, cabinet_kinds=TASK_KINDS[self.task])
+            world = ManipulationWorld(config)
             try:
                 target, point = self._choose_target(world, rng)
                 break
@@ -686,6 +705,7 @@ class ManipulationPOMDP(GenerativePOMDP):
         out: dict[str, Any] = {"time": self.timers.as_dict()}
         if self.real is not None:
             out["cabinet_seed"] = self.real.seed
+            out["cabinet"] = self.real.world.scene.cabinet_spec.name
             out["real"] = [f"{k} {o.status}" for k, o in zip(self.real.labels,
                            self.real.outcomes, strict=True)]  # fmt: skip
         if w is not None:
@@ -718,12 +738,21 @@ class ManipulationPOMDP(GenerativePOMDP):
         spec = world.scene.cabinet_spec
         T = world.scene.T_world_cabinet
         kinds = TASK_KINDS[self.task]
+        if self.target_link is not None:
+            part = spec.part(self.target_link)
+            if part.kind not in kinds:
+                raise ConfigError(
+                    f"target_link {self.target_link!r} of {spec.name} is a {part.kind}; "
+                    f"the {self.task} task needs a {'/'.join(kinds)} (its: "
+                    f"{[p.link for p in spec.parts if p.kind in kinds]})"
+                )
+            return part.link, (T @ np.r_[part.cell_center, 1.0])[:3]
         if self.target is not None:
             link = _part_at_point(spec, T, self.target, kinds)
             if link is None:
                 raise ConfigError(
                     f"target {np.round(self.target, 3).tolist()} is on no "
-                    f"{'/'.join(kinds)} part of cabinet {world.config.cabinet_seed} "
+                    f"{'/'.join(kinds)} part of cabinet {spec.name} "
                     f"(its cells: {_cells(spec, T, kinds)})"
                 )
             return link, self.target
@@ -733,8 +762,8 @@ class ManipulationPOMDP(GenerativePOMDP):
             if self._fills(world, p) if p.kind == "shelf" else self._opens(world, p):
                 return p.link, (T @ np.r_[p.cell_center, 1.0])[:3]
         raise ConfigError(
-            f"cabinet {world.config.cabinet_seed} has no {'/'.join(kinds)} part the robot "
-            "can open; pass another cabinet_seed"
+            f"cabinet {spec.name} has no {'/'.join(kinds)} part the robot "
+            "can open; pass another cabinet_seed or object"
         )
 
     def _opens(self, world: ManipulationWorld, part) -> bool:
