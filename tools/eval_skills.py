@@ -86,6 +86,7 @@ from strug_manip.control.twin import TIMESTEP as TWIN_STEP
 from strug_manip.domains.manipulation.rules import dragged, inside, open_enough
 from strug_manip.experiments.seeds import seed_range
 from strug_manip.objects.hypotheses import BelievedJoint, believed_spec, cell_joints, model_of
+from strug_manip.objects.loader import object_folders
 from strug_manip.world import ManipulationWorld, SceneConfig
 
 #: The two likeliest confusions of each kinematic model.
@@ -368,6 +369,11 @@ def evaluate_object(
     return evaluate_scenes(folder.name, configs, twin_steps, only_twin)
 
 
+def _evaluate_named(folders: dict[str, Path], name: str, **kwargs) -> dict:
+    """:func:`evaluate_object` of ``folders[name]`` (a picklable job by name)."""
+    return evaluate_object(folders[name], **kwargs)
+
+
 def evaluate_scenes(
     key: int | str,
     configs: dict[str, SceneConfig],
@@ -476,8 +482,14 @@ def summary(records: list[dict]) -> dict:
                 "moved": int(sum(m > 0.005 for m in ms)),
             }
     out["probes"] = probes
-    for name, scene in (("chain_drawer", "drawer"), ("chain_door", "door")):
-        out[name] = rate([p["chain"]["ok"] for p in parts if p["scene"] == scene and "chain" in p])
+    for name, drawer in (("chain_drawer", True), ("chain_door", False)):
+        out[name] = rate(
+            [
+                p["chain"]["ok"]
+                for p in parts
+                if (p["category"] == "open_drawer") == drawer and "chain" in p
+            ]
+        )
     walls = [p["open"]["wall"] for p in parts]
     per: dict[str, list[float]] = {}
     for p in parts:
@@ -519,22 +531,31 @@ def usable(rec: dict, steps: list[str], only_twin: bool) -> bool:
     return (only_twin or rec.get("only") is None) and (not rec["parts"] or set(steps) <= have)
 
 
-def load(path: Path) -> dict[int, dict]:
-    """The records already in ``path`` (a line torn by a kill is dropped)."""
-    done: dict[int, dict] = {}
+def load(path: Path) -> dict[int | str, dict]:
+    """The records already in ``path`` by seed (an object's: by folder name; a line
+    torn by a kill is dropped)."""
+    done: dict[int | str, dict] = {}
     if path.is_file():
         for line in path.read_text().splitlines():
             try:
                 rec = json.loads(line)
             except json.JSONDecodeError:
                 continue
-            done[int(rec["seed"])] = rec
+            key = rec["seed"]
+            done[int(key) if isinstance(key, int | float) else key] = rec
     return done
 
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--seeds", type=seed_range, required=True, help="A:B, generator seeds A..B-1")
+    which = ap.add_mutually_exclusive_group(required=True)
+    which.add_argument("--seeds", type=seed_range, help="A:B, generator seeds A..B-1")
+    which.add_argument(
+        "--objects",
+        type=Path,
+        help="a PartNet-Mobility object folder, or a folder of them: every handled part "
+        "of each (ground truth from its URDF, semantics and geometry)",
+    )
     ap.add_argument("--json", action="store_true", help="print one JSON object")
     ap.add_argument("--out", type=Path, default=None, help="results folder (resumable)")
     ap.add_argument("--workers", type=int, default=1, help="processes (default 1)")
@@ -548,15 +569,26 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--only", choices=("twin",), default=None,
                     help="twin: only the runs the twin is compared on")  # fmt: skip
     args = ap.parse_args(argv)
-    a, b = args.seeds.start, args.seeds.stop
     only_twin = args.only == "twin"
-    out_dir = args.out or Path(f"runs/eval_skills_{'twin_' if only_twin else ''}{a}_{b}")
+    if args.objects is not None:
+        folders = {f.name: f for f in object_folders(args.objects)}
+        keys: list = list(folders)
+        label = f"objects {args.objects}"
+        job = functools.partial(
+            _evaluate_named, folders, twin_steps=args.twin_steps, only_twin=only_twin
+        )
+        default_out = Path(f"runs/eval_skills_objects_{args.objects.name}")
+    else:
+        a, b = args.seeds.start, args.seeds.stop
+        keys, label = list(range(a, b)), f"{a}:{b}"
+        job = functools.partial(evaluate_seed, twin_steps=args.twin_steps, only_twin=only_twin)
+        default_out = Path(f"runs/eval_skills_{'twin_' if only_twin else ''}{a}_{b}")
+    out_dir = args.out or default_out
     out_dir.mkdir(parents=True, exist_ok=True)
     path = out_dir / "results.jsonl"
     steps = [f"{dt:g}" for dt in args.twin_steps]
     done = {s: r for s, r in load(path).items() if usable(r, steps, only_twin)}
-    todo = [s for s in range(a, b) if s not in done]
-    job = functools.partial(evaluate_seed, twin_steps=args.twin_steps, only_twin=only_twin)
+    todo = [s for s in keys if s not in done]
     from tqdm import tqdm
 
     bar = tqdm(total=len(todo), unit="cabinet", desc="eval_skills", file=sys.stderr)
@@ -577,15 +609,15 @@ def main(argv: list[str] | None = None) -> int:
             for seed in todo:
                 keep(job(seed))
     bar.close()
-    records = [done[s] for s in range(a, b) if s in done]
+    records = [done[s] for s in keys if s in done]
     figures = summary(records)
     (out_dir / "summary.json").write_text(json.dumps(figures, indent=1) + "\n")
     if args.plot is not None and not only_twin:
-        plot_drag(records, args.plot, f"{a}:{b}")
+        plot_drag(records, args.plot, label)
     if args.json:
         print(json.dumps(figures))
     else:
-        print(report(figures, f"{a}:{b}"))
+        print(report(figures, label))
     return 0
 
 
