@@ -231,6 +231,11 @@ def _part(obj: ArticulatedObject, j: JointInfo, kind: str, x_front: float, rgba:
         ]
         found = [c for c in cells if c is not None]
         inside = max(found, key=lambda c: float(np.prod(c[1]))) if found else None
+        if inside is not None:  # the part of the cell behind this door's opening
+            c_lo = np.maximum(inside[0] - inside[1] / 2, np.r_[-np.inf, lo[1:]])
+            c_hi = np.minimum(inside[0] + inside[1] / 2, np.r_[np.inf, hi[1:]])
+            ok = np.all(c_hi - c_lo >= MIN_INTERIOR)
+            inside = (0.5 * (c_lo + c_hi), c_hi - c_lo) if ok else None
     boards = [
         box(f"board_{i}", a - origin, b - origin, rgba["front"])
         for i, (n, a, b) in enumerate(boxes)
