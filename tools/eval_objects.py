@@ -53,6 +53,16 @@ def stand_still(obj, seconds: float) -> dict:
     }
 
 
+def _part_row(p) -> dict:
+    return {
+        "link": p.link,
+        "kind": p.kind,
+        "hinge": p.hinge,
+        "handle": p.handle,
+        "interior": p.interior_size is not None,
+    }
+
+
 def evaluate(folder: Path, seconds: float) -> dict:
     """Every figure of one object (module docstring)."""
     with tempfile.TemporaryDirectory() as cache:
@@ -76,16 +86,7 @@ def evaluate(folder: Path, seconds: float) -> dict:
         "mass": round(obj.mass, 2),
         "size_xyz": [round(float(v), 3) for v in obj.bounds[1] - obj.bounds[0]],
         "stand_still": still,
-        "parts": [
-            {
-                "link": p.link,
-                "kind": p.kind,
-                "hinge": p.hinge,
-                "handle": p.handle,
-                "interior": p.interior_size is not None,
-            }
-            for p in spec.movable_parts
-        ],  # fmt: skip
+        "parts": [_part_row(p) for p in spec.movable_parts],
     }
 
 
