@@ -6,6 +6,7 @@ Usage::
     python tools/eval_perception.py --seeds 2000:2030 --views 4 --json
     python tools/eval_perception.py --seeds 3000:3010 --oracle        # geometry alone
     python tools/eval_perception.py --seeds 3000:3010 --dropout 0.11  # NaN depth dropouts
+    python tools/eval_perception.py --objects ~/partnet --views 4       # real objects
 
 Per cabinet seed: the cabinet in one random state (each movable part opened with
 probability 0.5, as in training), seen from the robot's ``--views`` standard head poses
@@ -78,8 +79,11 @@ from strug_manip.domains.manipulation.belief import (
     sample_particles,
 )
 from strug_manip.experiments.seeds import evaluation_seeds
-from strug_manip.objects import generate_cabinet
+from strug_manip.objects import generate_cabinet, load_articulated_object
 from strug_manip.objects.assembly import FRONT, GAP, scene_object_pose
+from strug_manip.objects.describe import describe_object
+from strug_manip.objects.generator import CabinetSpec
+from strug_manip.objects.loader import object_folders
 from strug_manip.world.perception_data import LabelledView, render_episode
 from strug_manip.world.scene import SceneConfig
 
@@ -112,10 +116,11 @@ def _angle(a: np.ndarray, b: np.ndarray) -> float:
     return math.degrees(math.acos(max(-1.0, min(1.0, c))))
 
 
-def true_parts(seed: int, T_world_cab: np.ndarray, fused: FusedCabinet | None) -> list[dict]:
-    """The generator's parts in the world (and their front rectangles in the fused front
-    frame, if any)."""
-    spec = generate_cabinet(seed)
+def true_parts(
+    spec: CabinetSpec, T_world_cab: np.ndarray, fused: FusedCabinet | None
+) -> list[dict]:
+    """The true parts in the world (and their front rectangles in the fused front frame,
+    if any): the generator's, or a real object's description."""
     R, t = T_world_cab[:3, :3], T_world_cab[:3, 3]
     out = []
     for p in spec.parts:
@@ -196,11 +201,23 @@ def hypothesis_joint(h, front) -> tuple[str, np.ndarray, np.ndarray, np.ndarray]
 
 
 def evaluate_cabinet(
-    seed: int, args, perceiver: Perceiver | None, rng: np.random.Generator
+    seed: int | str,
+    args,
+    perceiver: Perceiver | None,
+    rng: np.random.Generator,
+    folder: Path | None = None,
+    view_seed: int = 0,
 ) -> dict:
-    """Every figure of one cabinet (module docstring)."""
-    lvs = render_episode(seed, args.views)
-    spec = generate_cabinet(seed)
+    """Every figure of one cabinet (module docstring): the generated cabinet ``seed``,
+    or the real object in ``folder`` (``seed``: its name; the views drawn with the
+    object's index in the evaluation, ``view_seed``)."""
+    if folder is None:
+        lvs = render_episode(int(seed), args.views)
+        spec = generate_cabinet(int(seed))
+    else:
+        lvs = render_episode(view_seed, args.views, config=SceneConfig(cabinet_folder=folder))
+        spec = describe_object(load_articulated_object(folder, progress=False))
+    by_joint = {p.joint: p for p in spec.parts}
     T_world_cab = lvs[0].T_world_camera @ lvs[0].T_camera_cabinet
     rec = Counter()
     seconds = []
@@ -220,7 +237,8 @@ def evaluate_cabinet(
         pm = lv.part_map[::2, ::2]
         for k, jt in enumerate(lv.joint_type):
             mask = pm == k + 1
-            if jt == 0 or mask.sum() < MIN_VIEW_PIXELS:
+            part = by_joint.get(lv.joint_names[k])  # helper links and wheels are no part
+            if jt == 0 or part is None or mask.sum() < MIN_VIEW_PIXELS:
                 continue
             rec["view_parts"] += 1
             best, iou = None, 0.0
@@ -233,17 +251,17 @@ def evaluate_cabinet(
                 rec["view_found"] += 1
                 right = int(np.argmax(best.class_prob)) == int(jt)
                 rec["view_type_ok"] += right
-                if type_unseen(spec.parts[k], lv.q[k]):
+                if type_unseen(part, lv.q[k]):
                     rec["view_unseen"] += 1
                     rec["view_unseen_ok"] += right
                 if not right:
-                    causes[f"per view: {_front_kind(spec.parts[k], lv.q[k])} typed "
+                    causes[f"per view: {_front_kind(part, lv.q[k])} typed "
                            f"{TYPES[int(np.argmax(best.class_prob))]}"] += 1  # fmt: skip
     t0 = time.perf_counter()
     try:
         fused = fuse(vparts)
     except Exception as e:  # a cabinet not found counts every part as missed
-        truth = true_parts(seed, T_world_cab, None)
+        truth = true_parts(spec, T_world_cab, None)
         n = sum(p["type"] != "fixed" for p in truth)
         return dict(
             rec=rec,
@@ -266,7 +284,7 @@ def evaluate_cabinet(
     particles = sample_particles(
         runs, rng, BeliefConfig(particles=args.particles, noisy_runs=args.noisy_runs)
     )
-    truth = true_parts(seed, T_world_cab, fused)
+    truth = true_parts(spec, T_world_cab, fused)
     est = [hypothesis_joint(h, fused.front) for h in fused.parts]
     used = set()
     axis_err, hinge_err, complete = [], [], True
@@ -403,11 +421,15 @@ def summarise(results: list[dict]) -> tuple[dict, dict[str, int]]:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument(
-        "--seeds",
-        type=evaluation_seeds,
-        required=True,
-        help="START:STOP generator seeds (< 10,000)",
+    which = ap.add_mutually_exclusive_group(required=True)
+    which.add_argument(
+        "--seeds", type=evaluation_seeds, help="START:STOP generator seeds (< 10,000)"
+    )
+    which.add_argument(
+        "--objects",
+        type=Path,
+        help="a PartNet-Mobility object folder or a folder of them (truth: the object's "
+        "own description, from its URDF, semantics and geometry)",
     )
     ap.add_argument("--views", type=int, default=4)
     ap.add_argument("--particles", type=int, default=50)
@@ -421,24 +443,28 @@ def main(argv: list[str] | None = None) -> int:
 
     if not 0.0 <= args.dropout < 1.0:
         raise SystemExit(f"--dropout must be in [0, 1), got {args.dropout}")
-    seeds = args.seeds
-    SceneConfig()  # the scene the views come from
     perceiver = None if args.oracle else Perceiver(args.weights)
     rng = np.random.default_rng(0)
-    results = [
-        evaluate_cabinet(s, args, perceiver, rng)
-        for s in tqdm(seeds, unit="cabinet", disable=args.json)
-    ]
+    if args.objects is not None:
+        folders = object_folders(args.objects)
+        what = f"objects {args.objects} ({len(folders)})"
+        results = []
+        for i, folder in enumerate(tqdm(folders, unit="object", disable=args.json)):
+            results.append(evaluate_cabinet(folder.name, args, perceiver, rng, folder, i))
+    else:
+        seeds = args.seeds
+        what = f"seeds {seeds.start}:{seeds.stop}"
+        results = [
+            evaluate_cabinet(s, args, perceiver, rng)
+            for s in tqdm(seeds, unit="cabinet", disable=args.json)
+        ]
     out, causes = summarise(results)
     if args.json:  # stdout: the issue's keys and joint_type_unseen; the causes go to stderr
         print(json.dumps(out))
         print(f"failure causes (per part): {json.dumps(causes)}", file=sys.stderr)
         return 0
     pct = lambda d: f"{d['ok']}/{d['n']} = {100 * d['ok'] / max(d['n'], 1):.1f}%"  # noqa: E731
-    print(
-        f"seeds {seeds.start}:{seeds.stop}, {args.views} views per cabinet"
-        + (" (oracle maps)" if args.oracle else "")
-    )
+    print(f"{what}, {args.views} views per cabinet" + (" (oracle maps)" if args.oracle else ""))
     print(f"parts found (per view, IoU >= 0.5): {pct(out['parts_found'])}")
     print(f"joint type right (found parts):    {pct(out['joint_type'])}")
     jt, un = out["joint_type"], out["joint_type_unseen"]
