@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import coacd
 import cv2
 import mujoco
 import numpy as np
@@ -154,7 +153,7 @@ def test_flat_panel_becomes_one_board_mujoco_compiles(tmp_path: Path) -> None:
     np.testing.assert_allclose(np.ptp(pieces[0], axis=0), [0.4, 0.3, BOARD_THICKNESS], atol=1e-9)
     assert pieces[0][:, 2].mean() == pytest.approx(0.5)
     assert compile_pieces(pieces).nmesh == 1
-    assert list(tmp_path.glob("*.npz")) == []  # only decompositions are cached
+    assert len(list(tmp_path.glob("*.npz"))) == 1  # every mesh's pieces: warm loads read them
 
 
 def test_cube_is_one_piece_and_scale_applies(tmp_path: Path) -> None:
@@ -201,7 +200,7 @@ def test_concave_mesh_is_decomposed_hollow_and_cached(tmp_path, monkeypatch) -> 
     def refuse(*args, **kwargs):
         raise AssertionError("CoACD ran although the result is cached")
 
-    monkeypatch.setattr(coacd, "run_coacd", refuse)
+    monkeypatch.setattr(meshes.coacd, "run_coacd", refuse)
     again = convex_pieces(path, cache_dir=cache, progress=False)
     assert len(again) == len(pieces)
     assert all(np.array_equal(a, b) for a, b in zip(again, pieces, strict=True))
@@ -215,7 +214,7 @@ def test_corrupt_cache_is_recomputed_with_progress(tmp_path, monkeypatch, capsys
         calls.append(kwargs)
         return [(h, np.zeros((0, 3), np.int32)) for h in halves]
 
-    monkeypatch.setattr(coacd, "run_coacd", fake)
+    monkeypatch.setattr(meshes.coacd, "run_coacd", fake)
     monkeypatch.setenv("STRUG_MANIP_CACHE", str(tmp_path / "root"))
     assert meshes.default_cache_dir() == tmp_path / "root" / "coacd"
     path = write_obj(tmp_path / "box.obj", *solid_open_box())
@@ -230,3 +229,22 @@ def test_corrupt_cache_is_recomputed_with_progress(tmp_path, monkeypatch, capsys
     assert [len(p) for p in second] == [8, 8]
     convex_pieces(path, (1.0, 1.0, 2.0), progress=False)  # another scale: another key
     assert len(calls) == 3
+
+
+def test_importing_meshes_first_leaves_pinocchio_able_to_parse_urdf() -> None:
+    """CoACD loaded before Pinocchio breaks urdfdom's number parsing; meshes.py imports
+    Pinocchio first, whatever a user imports first (a fresh interpreter)."""
+    import subprocess
+    import sys
+
+    code = (
+        "import strug_manip.objects.meshes\n"
+        "import pinocchio as pin\n"
+        'x = \'<robot name="a"><link name="b"/><link name="c"/><joint name="j" '
+        'type="revolute"><origin xyz="0 0 0.5" rpy="0 0 0"/><parent link="b"/>'
+        '<child link="c"/><axis xyz="0 0 1"/><limit lower="0" upper="1" effort="1" '
+        'velocity="1"/></joint></robot>\'\n'
+        "print(pin.buildModelFromXML(x).nq)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "1"

@@ -110,11 +110,14 @@ def _transform(T: np.ndarray, pts: np.ndarray) -> np.ndarray:
 
 
 def _with_pieces(
-    link: LinkInfo, cache_dir: Path | None, progress: bool
-) -> tuple[LinkInfo, list[str]]:
+    link: LinkInfo,
+    cache_dir: Path | None,
+    progress: bool,
+    textures: dict[Path, np.ndarray | None],
+) -> LinkInfo:
     """``link`` with every collision mesh replaced by its convex pieces and every visual
-    mesh read into memory (with its material colour); the problems found."""
-    problems: list[str] = []
+    mesh read into memory (with its material colour; ``textures``: the texture colours
+    read so far, shared across the object's links)."""
     names = {(str(v.mesh), v.scale, v.T_link_geom.tobytes()): v.name for v in link.visuals}
     collisions = []
     for g in link.collisions:
@@ -129,14 +132,14 @@ def _with_pieces(
         if g.shape != "mesh" or g.mesh.suffix.lower() != ".obj":  # type: ignore[union-attr]
             visuals.append(g)
             continue
-        mesh = read_obj(g.mesh)  # type: ignore[arg-type]
+        mesh = read_obj(g.mesh, textures)  # type: ignore[arg-type]
         if len(mesh.faces) == 0:
             continue
         verts = mesh.vertices * np.asarray(g.scale)
         visuals.append(
             replace(g, vertices=verts, faces=mesh.faces, rgba=g.rgba or mesh.rgba, mesh=None)
         )
-    return replace(link, collisions=tuple(collisions), visuals=tuple(visuals)), problems
+    return replace(link, collisions=tuple(collisions), visuals=tuple(visuals))
 
 
 def geom_points(g: GeometryInfo) -> np.ndarray:
@@ -294,9 +297,8 @@ def conform(
     Returns:
         The :class:`Conformed` object.
     """
-    links = {}
-    for name, link in urdf.links.items():
-        links[name], _ = _with_pieces(link, cache_dir, progress)
+    textures: dict[Path, np.ndarray | None] = {}
+    links = {n: _with_pieces(link, cache_dir, progress, textures) for n, link in urdf.links.items()}
     pieced = replace(urdf, links=links)
     yaw = front_yaw(pieced)
     R = np.eye(4)

@@ -25,7 +25,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from types import MappingProxyType
 
+# isort: off
+# Pinocchio before CoACD: CoACD's wheel loads libraries that, loaded first, break
+# urdfdom's number parsing (every URDF then fails in pin.buildModelFromXML: "Unable to
+# parse component [0] to a double"). Measured with coacd 1.0.14, pin 3.x.
+import pinocchio  # noqa: F401
 import coacd
+
+# isort: on
 import cv2
 import numpy as np
 import platformdirs
@@ -76,7 +83,7 @@ COACD_PARAMS: Mapping[str, object] = MappingProxyType(
 MAX_COMPONENTS: int = 64
 """A concave mesh with more connected components than this goes to CoACD whole."""
 
-_CACHE_VERSION = "strug-manip-meshes-1"
+_CACHE_VERSION = "strug-manip-meshes-2"  # 2: every mesh's pieces, not only CoACD's
 _SAMPLE_BUDGET = 60_000  # surface samples of a mesh in concavity() (a quarter on its hull)
 _MIN_SPACING = 0.002  # [m] finest sample spacing in concavity(), about its error
 
@@ -96,12 +103,17 @@ class ObjMesh:
     rgba: tuple[float, float, float, float]
 
 
-def read_obj(path: Path) -> ObjMesh:
+def read_obj(path: Path, textures: dict[Path, np.ndarray | None] | None = None) -> ObjMesh:
     """Reads the ``v``, ``f``, ``usemtl`` and ``mtllib`` lines of a Wavefront OBJ file.
 
     The colour is the MTL ``Kd`` of the material used by most triangles, times the mean
     colour of its ``map_Kd`` texture if that image reads, with alpha ``d`` (or ``1 - Tr``);
     :data:`DEFAULT_RGBA` without material.
+
+    Args:
+        path: the OBJ file.
+        textures: texture path -> mean RGB (3,) [0..1] (or None: unreadable), filled and
+            reused across calls (PartNet meshes share a handful of texture images).
 
     Raises:
         ConfigError: naming the file, if it is unreadable, has no vertex or a bad face.
@@ -149,11 +161,17 @@ def read_obj(path: Path) -> ObjMesh:
     return ObjMesh(
         vertices=np.asarray(verts, dtype=np.float64),
         faces=np.asarray(tris, dtype=np.int64).reshape(-1, 3),
-        rgba=DEFAULT_RGBA if name is None else _material_rgba(path.parent, libs, name),
+        rgba=(
+            DEFAULT_RGBA
+            if name is None
+            else _material_rgba(path.parent, libs, name, {} if textures is None else textures)
+        ),
     )
 
 
-def _material_rgba(folder: Path, libs: list[str], name: str) -> tuple[float, float, float, float]:
+def _material_rgba(
+    folder: Path, libs: list[str], name: str, textures: dict[Path, np.ndarray | None]
+) -> tuple[float, float, float, float]:
     """Colour [rgba 0..1] of material ``name`` from the first MTL library defining it."""
     files = [folder / lib for lib in libs] + [folder / w for lib in libs for w in lib.split()]
     for mtl in dict.fromkeys(f for f in files if f.is_file()):  # a name may hold spaces
@@ -171,11 +189,13 @@ def _material_rgba(folder: Path, libs: list[str], name: str) -> tuple[float, flo
             elif props is not None and key:
                 props[key] = value.strip()
         if props is not None:
-            return _props_rgba(mtl.parent, props)
+            return _props_rgba(mtl.parent, props, textures)
     return DEFAULT_RGBA
 
 
-def _props_rgba(folder: Path, props: dict[str, str]) -> tuple[float, float, float, float]:
+def _props_rgba(
+    folder: Path, props: dict[str, str], textures: dict[Path, np.ndarray | None]
+) -> tuple[float, float, float, float]:
     """Colour [rgba 0..1] from the ``Kd``, ``map_Kd``, ``d`` and ``Tr`` of one material."""
     texture = props.get("map_Kd", "").split()
     try:
@@ -185,10 +205,13 @@ def _props_rgba(folder: Path, props: dict[str, str]) -> tuple[float, float, floa
         kd, alpha = [], 1.0
     rgb = np.resize(np.asarray(kd or [1.0 if texture else DEFAULT_RGBA[0]]), 3)
     if texture:  # the file name is the last word (options like `-s 1 1 1` come first)
-        image = folder / texture[-1]
-        image = cv2.imread(str(image), cv2.IMREAD_COLOR) if image.is_file() else None
-        if image is not None and image.size:
-            rgb = rgb * image.reshape(-1, 3).mean(axis=0)[::-1] / 255.0  # BGR -> RGB
+        file = folder / texture[-1]
+        if file not in textures:
+            image = cv2.imread(str(file), cv2.IMREAD_COLOR) if file.is_file() else None
+            ok = image is not None and image.size
+            textures[file] = image.reshape(-1, 3).mean(axis=0)[::-1] / 255.0 if ok else None
+        if textures[file] is not None:
+            rgb = rgb * textures[file]  # BGR -> RGB above
     r, g, b = (float(c) for c in np.clip(rgb, 0.0, 1.0))
     return (r, g, b, float(np.clip(alpha, 0.0, 1.0)))
 
@@ -314,30 +337,41 @@ def convex_pieces(
         ConfigError: naming the file, for an unreadable or malformed OBJ or a bad scale.
     """
     path = Path(path)
-    mesh = read_obj(path)
     try:
         s = np.asarray(scale, dtype=np.float64).reshape(3)
     except (TypeError, ValueError):
         s = np.full(3, np.nan)
     if not np.all(np.isfinite(s)):
         raise ConfigError(f"mesh scale {scale!r} for {path}: expected 3 finite numbers")
-    vertices, faces = mesh.vertices * s, mesh.faces
+    try:
+        digest = hashlib.sha256(path.read_bytes())
+    except OSError as exc:
+        raise ConfigError(f"cannot read OBJ file {path}: {exc}") from None
+    digest.update(s.astype("<f8").tobytes())
+    digest.update(json.dumps([dict(COACD_PARAMS), MAX_COMPONENTS, CONCAVITY_LIMIT]).encode())
+    digest.update(f"{_CACHE_VERSION} {BOARD_THICKNESS!r}".encode())
+    # Every mesh's pieces are cached, not only decompositions: measuring concavity costs
+    # tens of milliseconds a mesh, seconds for an object of a hundred sub-meshes.
+    file = (cache_dir or default_cache_dir()) / f"{digest.hexdigest()}.npz"
+    pieces = _load_pieces(file)
+    if pieces is None:
+        mesh = read_obj(path)
+        pieces = _pieces_of(path.name, mesh.vertices * s, mesh.faces, progress)
+        _save_pieces(file, pieces)
+    return pieces
+
+
+def _pieces_of(
+    name: str, vertices: np.ndarray, faces: np.ndarray, progress: bool
+) -> tuple[np.ndarray, ...]:
+    """The pieces of one scaled mesh (:func:`convex_pieces`'s rules), uncached."""
     kind = _classify(vertices, faces)
     if kind == "degenerate":
         return ()
     if kind != "concave":
         piece = _solid_piece(vertices[np.unique(faces)])
         return () if piece is None else (piece,)
-    digest = hashlib.sha256(path.read_bytes())
-    digest.update(s.astype("<f8").tobytes())
-    digest.update(json.dumps([dict(COACD_PARAMS), MAX_COMPONENTS, CONCAVITY_LIMIT]).encode())
-    digest.update(f"{_CACHE_VERSION} {BOARD_THICKNESS!r}".encode())
-    file = (cache_dir or default_cache_dir()) / f"{digest.hexdigest()}.npz"
-    pieces = _load_pieces(file)
-    if pieces is None:
-        pieces = _decompose(path.name, vertices, faces, progress)
-        _save_pieces(file, pieces)
-    return pieces
+    return _decompose(name, vertices, faces, progress)
 
 
 def _components(faces: np.ndarray) -> list[np.ndarray]:
