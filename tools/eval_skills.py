@@ -668,7 +668,9 @@ def plot_drag(records: list[dict], path: Path, seeds: str) -> None:
 def report(fig: dict, seeds: str) -> str:
     """The figures as lines a person reads (the ``--json`` object has them all)."""
     pct = lambda r: f"{r['ok']}/{r['n']} ({100 * r['ok'] / max(r['n'], 1):.0f}%)"  # noqa: E731
-    lines = [f"eval_skills on generated cabinets {seeds}"]
+    lines = [
+        f"eval_skills on {seeds if seeds.startswith('objects') else 'generated cabinets ' + seeds}"
+    ]
     if "open_drawer" not in fig:  # --only twin
         return "\n".join(lines + twin_lines(fig, pct))
     for cat in ("open_drawer", "open_door", "open_flap"):

@@ -301,68 +301,73 @@ def conform(
     links = {n: _with_pieces(link, cache_dir, progress, textures) for n, link in urdf.links.items()}
     pieced = replace(urdf, links=links)
     yaw = front_yaw(pieced)
-    R = np.eye(4)
-    R[:2, :2] = [[math.cos(yaw), -math.sin(yaw)], [math.sin(yaw), math.cos(yaw)]]
-    poses = link_poses(pieced)
-    moving = {n for j in pieced.joints if j.movable for n in moving_subtree(pieced, j)}
-    # The carcass decides scale and origin (handles and fronts standing proud do not).
-    carcass = [n for n in links if n not in moving] or list(links)
-    body_pts = np.concatenate([_transform(R, link_points(pieced, n, poses[n])) for n in carcass])
-    size = body_pts.max(axis=0) - body_pts.min(axis=0)
-    s = policy_scale(size) if scale is None else float(scale)
-    # The root's new frame: rotated, then moved so the scaled footprint is centred on
-    # the origin and the lowest point on z = 0.
-    blo, bhi = body_pts.min(axis=0), body_pts.max(axis=0)
-    offset = np.array([(blo[0] + bhi[0]) / 2, (blo[1] + bhi[1]) / 2, blo[2]])
-    if np.all(np.abs(offset) <= ORIGIN_SLACK):
-        offset[:] = 0.0  # already in the object frame (e.g. a generated cabinet's folder)
-    T_root = R.copy()
-    T_root[:3, 3] = -offset
+    T_root, s = _root_frame(pieced, yaw, scale)
     new_links = {
         n: _scaled_link(link, T_root if n == urdf.root else np.eye(4), s)
         for n, link in links.items()
     }
-    flipped, defaulted, raw = [], [], []
-    for j in pieced.joints:
-        origin = (T_root @ j.origin) if j.parent == urdf.root else j.origin.copy()
-        origin[:3, 3] *= s
-        axis, lower, upper = j.axis.copy(), j.lower, j.upper
-        if j.movable and _opening_sign(j) < 0:
-            axis, lower, upper = -axis, -upper, -lower
-            flipped.append(j.name)
-        if j.type == "prismatic":
-            lower, upper = lower * s, upper * s
-        damping, friction = j.damping, j.friction
-        if j.movable and damping == 0.0 and friction == 0.0:
-            axis_object = R[:3, :3] @ j.axis_base
-            damping, friction = _default_dynamics(j, axis_object)
-            defaulted.append(j.name)
-        raw.append(
-            {
-                "name": j.name,
-                "type": j.type,
-                "parent": j.parent,
-                "child": j.child,
-                "origin": origin,
-                "axis": axis,
-                "lower": lower + 0.0,  # no "-0.0"
-                "upper": upper + 0.0,
-                "damping": damping,
-                "friction": friction,
-                "semantic": j.semantic,
-                "semantic_type": j.semantic_type,
-            }
-        )
-    joints, children = joint_tree(urdf.root, raw)
+    rows = [_joint_row(pieced, j, T_root, s) for j in pieced.joints]
+    joints, children = joint_tree(urdf.root, [r for r, _, _ in rows])
     out = replace(pieced, links=new_links, joints=joints, children=children)
-    return Conformed(out, s, yaw, tuple(flipped), tuple(defaulted))
+    flipped = tuple(r["name"] for r, f, _ in rows if f)
+    defaulted = tuple(r["name"] for r, _, d in rows if d)
+    return Conformed(out, s, yaw, flipped, defaulted)
 
 
-def size_of(urdf: ParsedUrdf) -> np.ndarray:
-    """Extents (x, y, z) [m] of the collision geometry with the joints at 0, (3,)."""
+def _root_frame(urdf: ParsedUrdf, yaw: float, scale: float | None) -> tuple[np.ndarray, float]:
+    """The root link's new pose (turned by ``yaw``, then moved so the carcass's scaled
+    footprint is centred on the origin and its bottom on z = 0; translation in unscaled
+    metres), (4, 4), and the scale."""
+    R = np.eye(4)
+    R[:2, :2] = [[math.cos(yaw), -math.sin(yaw)], [math.sin(yaw), math.cos(yaw)]]
     poses = link_poses(urdf)
-    pts = np.concatenate([link_points(urdf, n, poses[n]) for n in urdf.links])
-    return pts.max(axis=0) - pts.min(axis=0)
+    moving = {n for j in urdf.joints if j.movable for n in moving_subtree(urdf, j)}
+    # The carcass decides scale and origin (handles and fronts standing proud do not).
+    carcass = [n for n in urdf.links if n not in moving] or list(urdf.links)
+    pts = np.concatenate([_transform(R, link_points(urdf, n, poses[n])) for n in carcass])
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    s = policy_scale(hi - lo) if scale is None else float(scale)
+    offset = np.array([(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, lo[2]])
+    if np.all(np.abs(offset) <= ORIGIN_SLACK):
+        offset[:] = 0.0  # already in the object frame (e.g. a generated cabinet's folder)
+    T_root = R.copy()
+    T_root[:3, 3] = -offset
+    return T_root, s
+
+
+def _joint_row(
+    urdf: ParsedUrdf, j: JointInfo, T_root: np.ndarray, s: float
+) -> tuple[dict, bool, bool]:
+    """Joint ``j`` rewritten (its fields but the root-frame pose, for
+    :func:`~strug_manip.objects.urdf.joint_tree`), whether its sign was flipped, and
+    whether it got the default dynamics."""
+    origin = (T_root @ j.origin) if j.parent == urdf.root else j.origin.copy()
+    origin[:3, 3] *= s
+    axis, lower, upper = j.axis.copy(), j.lower, j.upper
+    flip = j.movable and _opening_sign(j) < 0
+    if flip:
+        axis, lower, upper = -axis, -upper, -lower
+    if j.type == "prismatic":
+        lower, upper = lower * s, upper * s
+    damping, friction = j.damping, j.friction
+    default = j.movable and damping == 0.0 and friction == 0.0
+    if default:
+        damping, friction = _default_dynamics(j, T_root[:3, :3] @ j.axis_base)
+    row = {
+        "name": j.name,
+        "type": j.type,
+        "parent": j.parent,
+        "child": j.child,
+        "origin": origin,
+        "axis": axis,
+        "lower": lower + 0.0,  # no "-0.0"
+        "upper": upper + 0.0,
+        "damping": damping,
+        "friction": friction,
+        "semantic": j.semantic,
+        "semantic_type": j.semantic_type,
+    }
+    return row, flip, default
 
 
 __all__: Sequence[str] = (

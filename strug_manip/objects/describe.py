@@ -198,6 +198,35 @@ def _grid(values: np.ndarray, descending: bool) -> np.ndarray:
     return idx
 
 
+def _part_interior(
+    obj: ArticulatedObject,
+    boxes: list[tuple[str, np.ndarray, np.ndarray]],
+    kind: str,
+    lo: np.ndarray,
+    hi: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """Centre (3,) and size (3,) [m] of where an object goes in a part (its front's box
+    ``lo``, ``hi``): a drawer's box, or the cell behind a door."""
+    if kind == "drawer":  # from the middle of the box behind the front, up to its sides
+        behind = [(a, b) for n, a, b in boxes if not _is_handle(n) and a[0] < hi[0] - 0.03]
+        blo = np.min([a for a, _ in behind], axis=0) if behind else lo
+        bhi = np.max([b for _, b in behind], axis=0) if behind else hi
+        inside = _interior(obj, 0.5 * (blo + bhi), top=float(bhi[2]))
+    else:  # the largest cell behind the door (a shelf may divide it)
+        cells = [
+            _interior(obj, np.array([lo[0] - 0.05, 0.5 * (lo[1] + hi[1]), z]), top=None)
+            for z in lo[2] + (hi[2] - lo[2]) * np.array([0.5, 0.25, 0.75])
+        ]
+        found = [c for c in cells if c is not None]
+        inside = max(found, key=lambda c: float(np.prod(c[1]))) if found else None
+        if inside is not None:  # the part of the cell behind this door's opening
+            c_lo = np.maximum(inside[0] - inside[1] / 2, np.r_[-np.inf, lo[1:]])
+            c_hi = np.minimum(inside[0] + inside[1] / 2, np.r_[np.inf, hi[1:]])
+            ok = np.all(c_hi - c_lo >= MIN_INTERIOR)
+            inside = (0.5 * (c_lo + c_hi), c_hi - c_lo) if ok else None
+    return inside
+
+
 def _part(obj: ArticulatedObject, j: JointInfo, kind: str, x_front: float, rgba: dict) -> dict:
     links = moving_subtree(obj.urdf, j)
     origin = j.T_base_joint[:3, 3].copy()
@@ -219,23 +248,7 @@ def _part(obj: ArticulatedObject, j: JointInfo, kind: str, x_front: float, rgba:
                 grasp[2] = c[2]
             else:
                 grasp[1] = c[1]
-    if kind == "drawer":  # from the middle of the box behind the front, up to its sides
-        behind = [(a, b) for n, a, b in boxes if not _is_handle(n) and a[0] < hi[0] - 0.03]
-        blo = np.min([a for a, _ in behind], axis=0) if behind else lo
-        bhi = np.max([b for _, b in behind], axis=0) if behind else hi
-        inside = _interior(obj, 0.5 * (blo + bhi), top=float(bhi[2]))
-    else:  # the largest cell behind the door (a shelf may divide it)
-        cells = [
-            _interior(obj, np.array([lo[0] - 0.05, 0.5 * (lo[1] + hi[1]), z]), top=None)
-            for z in lo[2] + (hi[2] - lo[2]) * np.array([0.5, 0.25, 0.75])
-        ]
-        found = [c for c in cells if c is not None]
-        inside = max(found, key=lambda c: float(np.prod(c[1]))) if found else None
-        if inside is not None:  # the part of the cell behind this door's opening
-            c_lo = np.maximum(inside[0] - inside[1] / 2, np.r_[-np.inf, lo[1:]])
-            c_hi = np.minimum(inside[0] + inside[1] / 2, np.r_[np.inf, hi[1:]])
-            ok = np.all(c_hi - c_lo >= MIN_INTERIOR)
-            inside = (0.5 * (c_lo + c_hi), c_hi - c_lo) if ok else None
+    inside = _part_interior(obj, boxes, kind, lo, hi)
     boards = [
         box(f"board_{i}", a - origin, b - origin, rgba["front"])
         for i, (n, a, b) in enumerate(boxes)
