@@ -16,8 +16,10 @@ from partnet_fixtures import BROKEN, BROKEN_MENTIONS, FIXTURES, fixture_truth, w
 from partnet_fixtures import write_fixture as write_partnet_fixture
 
 from planners.errors import ConfigError
+from strug_manip.cli import main
 from strug_manip.control import ControlContext, OpenDoor, OpenDrawer
 from strug_manip.control.grasps import handle_grasps
+from strug_manip.domains.manipulation.model import OpenDoorTask
 from strug_manip.domains.manipulation.rules import dragged
 from strug_manip.objects import load_articulated_object
 from strug_manip.objects.describe import describe_object
@@ -149,3 +151,45 @@ def test_object_folders_lists_a_folder_of_objects(folders: dict[str, Path], tmp_
         object_folders(tmp_path)
     with pytest.raises(ConfigError, match="not found"):
         object_folders(tmp_path / "missing")
+
+
+def _error_line(argv: list[str], capsys) -> str:
+    """``strug argv``'s one error line (exit 2)."""
+    try:
+        code = main(argv)
+    except SystemExit as exc:  # argparse's errors
+        code = exc.code
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and err[0].startswith("strug: error: "), err
+    return err[0]
+
+
+def test_the_commands_take_an_object_folder(folders: dict[str, Path], tmp_path: Path, capsys):
+    out = tmp_path / "scene.png"
+    assert main(["scene", "--object", str(folders["mixed"]), "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "object mixed" in printed and "door" in printed and "drawer" in printed
+    assert out.stat().st_size > 10_000
+    line = _error_line(["run", "--domain", "tiger", "--solver", "strug",
+                        "--object", str(folders["mixed"])], capsys)  # fmt: skip
+    assert "--object" in line and "tiger" in line
+    line = _error_line(["run", "--domain", "opendrawer", "--solver", "strug",
+                        "--target", "link_1"], capsys)  # fmt: skip
+    assert "--target" in line
+    bench = ["bench", "--domains", "opendrawer", "--solvers", "strug", "--seeds", "1"]
+    line = _error_line([*bench, "--objects", str(tmp_path), "--out", str(tmp_path / "b")], capsys)
+    assert "holds no object" in line
+
+
+def test_a_task_on_an_object_names_its_target_by_link(folders: dict[str, Path]) -> None:
+    task = OpenDoorTask(objects=(folders["mixed"],), target_link="link_1", particles=4)
+    with pytest.raises(ConfigError, match="is a drawer"):
+        task.sample_initial_state(np.random.default_rng(0))
+    door = next(p for p, t in fixture_truth("mixed")["parts"].items() if t["kind"] == "door")
+    task = OpenDoorTask(objects=(folders["mixed"],), target_link=door, particles=4)
+    task.sample_initial_state(np.random.default_rng(0))
+    try:
+        assert task.real.target == door
+        assert task.real.world.scene.cabinet_spec.name == "mixed"
+    finally:
+        task.close()
