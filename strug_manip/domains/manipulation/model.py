@@ -752,7 +752,7 @@ class ManipulationPOMDP(GenerativePOMDP):
             if link is None:
                 raise ConfigError(
                     f"target {np.round(self.target, 3).tolist()} is on no "
-                    f"{'/'.join(kinds)} part of cabinet {spec.name} "
+                    f"{'/'.join(kinds)} part of {spec.name} "
                     f"(its cells: {_cells(spec, T, kinds)})"
                 )
             return link, self.target
@@ -762,7 +762,7 @@ class ManipulationPOMDP(GenerativePOMDP):
             if self._fills(world, p) if p.kind == "shelf" else self._opens(world, p):
                 return p.link, (T @ np.r_[p.cell_center, 1.0])[:3]
         raise ConfigError(
-            f"cabinet {spec.name} has no {'/'.join(kinds)} part the robot "
+            f"{spec.name} has no {'/'.join(kinds)} part the robot "
             "can open; pass another cabinet_seed or object"
         )
 
