@@ -56,25 +56,15 @@ def _geom_xml(g: Geom, material: str) -> str:
     )
 
 
-_INERTIA_KEYS = {
-    "ixx": (0, 0),
-    "ixy": (0, 1),
-    "ixz": (0, 2),
-    "iyy": (1, 1),
-    "iyz": (1, 2),
-    "izz": (2, 2),
-}
-
-
 def _link_xml(name: str, geoms: Sequence[Geom], inertial: Inertial, materials: dict) -> str:
     J = inertial.inertia
     out = [
         f'  <link name="{name}">\n',
         f'    <inertial><origin xyz="{_v(inertial.com)}" rpy="0 0 0"/>'
         f'<mass value="{fmt_float(inertial.mass)}"/>'
-        "<inertia "
-        + " ".join(f'{k}="{fmt_float(J[i, j])}"' for k, (i, j) in _INERTIA_KEYS.items())
-        + "/></inertial>\n",
+        f'<inertia ixx="{fmt_float(J[0, 0])}" ixy="{fmt_float(J[0, 1])}" '
+        f'ixz="{fmt_float(J[0, 2])}" iyy="{fmt_float(J[1, 1])}" '
+        f'iyz="{fmt_float(J[1, 2])}" izz="{fmt_float(J[2, 2])}"/></inertial>\n',
     ]
     out += [_geom_xml(g, materials[g.rgba]) for g in geoms]
     out.append("  </link>\n")
