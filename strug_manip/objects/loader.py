@@ -309,7 +309,7 @@ def load_articulated_object(
     raw = parse_urdf(urdf_path, require_movable=True)
     conformed = conform(raw, scale=scale, cache_dir=cache_dir, progress=progress)
     urdf = conformed.urdf
-    model, data = _standalone(urdf, base_friction)
+    model, data = _standalone(urdf, base_friction, urdf_path)
     mass = float(model.body_mass.sum())
     if total_mass is None and not all(
         urdf.links[j.child].mass is not None for j in urdf.joints if j.movable
@@ -330,14 +330,17 @@ def load_articulated_object(
     )
 
 
-def _standalone(urdf: ParsedUrdf, base_friction: float) -> tuple[mujoco.MjModel, mujoco.MjData]:
-    """The object alone, fixed, joints at 0, kinematics and masses computed."""
+def _standalone(
+    urdf: ParsedUrdf, base_friction: float, path: Path
+) -> tuple[mujoco.MjModel, mujoco.MjData]:
+    """The object alone, fixed, joints at 0, kinematics and masses computed (``path``:
+    the URDF, for messages)."""
     spec = mujoco.MjSpec()
     spec.compiler.degree = False
     build_bodies(
         spec, urdf, pos=(0, 0, 0), yaw=0.0, free=False, prefix="", base_friction=base_friction
     )
-    model = compile_spec(spec, Path(urdf.name))
+    model = compile_spec(spec, path)
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)
     return model, data
