@@ -45,14 +45,11 @@ import time
 from collections import Counter, deque
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from perception.errors import NoCabinetError
-
-if TYPE_CHECKING:  # parts.py runs the per-view cues, which read instances with this module
-    from perception.parts import Instance, ViewParts
+from perception.instances import Instance, ViewParts
 
 #: Distance of a point on the front plane from it [m].
 PLANE_TOL = 0.006

@@ -47,16 +47,13 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import TYPE_CHECKING
 
 import cv2
 import numpy as np
 
 from perception.errors import NoCabinetError
 from perception.fusion import FrontFrame, Reading, front_frame, read_instance
-
-if TYPE_CHECKING:
-    from perception.parts import ViewParts
+from perception.instances import ViewParts
 
 #: Likelihood left to the joint types a cue rules out.
 CUE_EVIDENCE = 0.1

@@ -14,18 +14,28 @@ broadly), and the best sequence (ended by a terminal step or by
 from __future__ import annotations
 
 from collections.abc import Hashable
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import numpy as np
 
 from planners.errors import check_positive_int
 
-if TYPE_CHECKING:
-    from planners.pomdp import GenerativePOMDP
+
+class Simulable(Protocol):
+    """What the beam search uses of a generative model (a
+    :class:`~planners.pomdp.GenerativePOMDP` has it all; this module sits below it,
+    since the model's default ``plan_for`` is this search)."""
+
+    discount: float
+    max_steps: int
+
+    def action_space(self) -> Any: ...
+
+    def step(self, s: Any, a: Hashable, rng: np.random.Generator) -> tuple: ...
 
 
 def determinized_plan(
-    pomdp: GenerativePOMDP,
+    pomdp: Simulable,
     s: Any,
     rng: np.random.Generator,
     *,

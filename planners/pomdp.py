@@ -31,14 +31,13 @@ import math
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Hashable, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
+from planners.determinized import determinized_plan
 from planners.errors import ConfigError, ModelError, ObservationError
-
-if TYPE_CHECKING:
-    from planners.belief import ParticleBelief
+from planners.particles import ParticleBelief
 
 
 class Step(NamedTuple):
@@ -290,8 +289,6 @@ class GenerativePOMDP(ABC):
 
     def initial_belief(self, rng: np.random.Generator, n_particles: int) -> ParticleBelief:
         """``n_particles`` equally weighted draws from b0, each its own origin."""
-        from planners.belief import ParticleBelief
-
         return ParticleBelief.from_states(
             [self.sample_initial_state(rng) for _ in range(n_particles)]
         )
@@ -309,8 +306,6 @@ class GenerativePOMDP(ABC):
         with the default STRUG's rollouts fall back to random ones (``rollout="auto"``),
         and only the M plans of the matrix pay for the search.
         """
-        from planners.determinized import determinized_plan
-
         return determinized_plan(self, s, rng)
 
     def discrete_states(self, states: list[Any]) -> bool:

@@ -39,17 +39,11 @@ from strug_manip.cli_args import (
     positive_seconds,
 )
 from strug_manip.domains import DOMAIN_SUMMARIES, DOMAINS, MANIPULATION_DOMAINS, make_domain
-from strug_manip.experiments.bench import (
-    RESULTS,
-    BenchSpec,
-    budget_for,
-    load_results,
-    run_bench,
-    solver_config,
-)
+from strug_manip.experiments.bench import RESULTS, BenchSpec, load_results, run_bench
 from strug_manip.experiments.episode import DEFAULT_PARTICLES, StepRecord, run_episode
 from strug_manip.experiments.executors import EXECUTORS
 from strug_manip.experiments.table import to_markdown
+from strug_manip.experiments.task import budget_for, solver_config
 from strug_manip.objects.loader import object_folders
 
 #: The demo: a short Table I run of the toy domains.

@@ -21,8 +21,8 @@ from perception.fusion import (
     handle_shape,
     read_instance,
 )
+from perception.instances import Instance
 from perception.joint_cues import CUE_EVIDENCE, HandleSeen, closed_front_evidence
-from perception.parts import Instance
 
 FRONT = FrontFrame(np.eye(4), 0.8, 0.8, 0.4, True, 1000)
 

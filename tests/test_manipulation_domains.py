@@ -28,6 +28,7 @@ from strug_manip.domains.manipulation.state import (
 )
 from strug_manip.experiments.episode import run_episode
 from strug_manip.objects.hypotheses import BelievedJoint, model_of
+from strug_manip.world.scene import cabinet_pose
 
 #: A drawers-only cabinet whose top drawer the robot opens (``tools/eval_skills.py``).
 SEED = 11
@@ -226,9 +227,7 @@ def test_a_part_the_real_robot_sees_shut_is_shut_in_every_particle(drawer_episod
 def _standing_front(z: float, depth: float = 0.4) -> np.ndarray:
     """A front frame as the scene's cabinet table has it (facing the robot), its
     bottom ``z`` high [m]."""
-    from strug_manip.objects.assembly import scene_object_pose
-
-    T = scene_object_pose(depth, 1.0, 0.0, 0.5)
+    T = cabinet_pose(depth)
     F = np.eye(4)
     F[:3, :3] = T[:3, :3]
     F[:3, 3] = T[:3, :3] @ [depth / 2, 0.0, 0.0] + T[:3, 3]
@@ -261,7 +260,7 @@ def test_a_perceived_cabinet_stands_on_the_table_with_its_parts_where_they_were_
 
 def test_the_open_cell_keeps_its_measured_height_under_the_board_added_above_it():
     from strug_manip.domains.manipulation.belief import Particle, open_cell, with_open_cell
-    from strug_manip.objects.assembly import CabinetModel, assemble, scene_object_pose
+    from strug_manip.objects.assembly import CabinetModel, assemble
 
     F = _standing_front(0.5)
     model = CabinetModel(0.6, 0.8, 0.4, (), F)
@@ -274,12 +273,12 @@ def test_the_open_cell_keeps_its_measured_height_under_the_board_added_above_it(
     cloud = np.concatenate([slab((-0.28, 0.28), (0.292, 0.300)),
                             slab((-0.28, 0.28), (0.420, 0.428))])  # fmt: skip
     point = F[:3, :3] @ [0.0, 0.0, 0.36] + F[:3, 3]
-    spec, q = assemble(model)
+    spec, q = assemble(model, cabinet_pose(model.depth))
     cell = open_cell(model, point, [cloud])
     grown = with_open_cell(Particle(model, spec, q, (), 0), point, [cloud])
     assert len(grown.model.parts) == 2  # the cell and the space above it
     # No carcass board inside the opening: floor (0.300) to ceiling (0.420).
-    T_wo = scene_object_pose(0.4, 1.0, 0.0, 0.5)
+    T_wo = cabinet_pose(0.4)
     floor = float((F @ [0, 0, cell.rect[2] + 0.008, 1])[2])
     ceiling = float((F @ [0, 0, cell.rect[3], 1])[2])
     assert ceiling - floor == pytest.approx(0.12, abs=2e-3)
@@ -359,7 +358,9 @@ def test_a_believed_flap_has_a_friction_stay_and_stays_shut():
     def fall(stay: float | None) -> tuple[float, float]:
         flap = PartModel("door", rect, axis, np.array([0.0, 0.0, 0.052]), "bottom", 1.4,
                          q=0.15, damping=0.1, friction=0.1, stay=stay)  # fmt: skip
-        spec, q = assemble(CabinetModel(0.6, 0.5, 0.4, (flap,), _standing_front(0.5)))
+        spec, q = assemble(
+            CabinetModel(0.6, 0.5, 0.4, (flap,), _standing_front(0.5)), cabinet_pose(0.4)
+        )
         part = spec.movable_parts[0]
         w = ManipulationWorld.from_cabinet_spec(spec)
         try:
@@ -725,7 +726,9 @@ def test_a_believed_knob_is_built_as_a_knob_and_grasped_pitched():
         flap = PartModel("door", rect, axis, np.array([0.0, 0.0, 0.303]), "bottom", 1.4,
                          handle=handle, handle_pos=seen, stay=1.5,
                          handle_along=along)  # fmt: skip
-        spec, _ = assemble(CabinetModel(0.6, 0.6, 0.4, (flap,), _standing_front(0.6)))
+        spec, _ = assemble(
+            CabinetModel(0.6, 0.6, 0.4, (flap,), _standing_front(0.6)), cabinet_pose(0.4)
+        )
         return spec.movable_parts[0]
 
     knob, bar = part("knob"), part("bar")

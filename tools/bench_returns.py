@@ -72,9 +72,10 @@ import numpy as np
 
 from strug_manip.domains import make_domain
 from strug_manip.domains.tiger import LISTEN, OPEN_LEFT, OPEN_RIGHT, ListenUntilSure
-from strug_manip.experiments.bench import load_results, solver_config
+from strug_manip.experiments.bench import load_results
 from strug_manip.experiments.episode import episode_generators, run_episode
 from strug_manip.experiments.seeds import seed_range
+from strug_manip.experiments.task import solver_config
 
 POMDP_PY_VERSION = "1.3.5.1"
 DOMAIN = "tigerclassic"

@@ -34,7 +34,7 @@ from strug_manip.domains.manipulation.belief import SIDE_AXES, BeliefConfig, sam
 from strug_manip.experiments.seeds import evaluation_seeds
 from strug_manip.objects.assembly import FRONT, GAP, CabinetModel, PartModel, assemble
 from strug_manip.world.perception_data import CabinetViewer, ViewRanges
-from strug_manip.world.scene import SceneConfig
+from strug_manip.world.scene import SceneConfig, cabinet_pose
 from strug_manip.world.sim import ManipulationWorld
 from strug_manip.world.views import cabinet_cloud, look_poses, place_robot
 
@@ -116,7 +116,7 @@ def probe_cabinet(seed: int, perceiver: Perceiver | None, rng: np.random.Generat
             observed = cabinet_cloud(world, world.render())
             names, clouds = ["true"], [observed]
             for name, model in variants(particle.model, hit[0]).items():
-                spec, q = assemble(model)
+                spec, q = assemble(model, cabinet_pose(model.depth))
                 probed = spec.parts[order.index(hit[0])]
                 if probed.movable:
                     q[probed.joint] += (

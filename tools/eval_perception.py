@@ -80,12 +80,12 @@ from strug_manip.domains.manipulation.belief import (
 )
 from strug_manip.experiments.seeds import evaluation_seeds
 from strug_manip.objects import generate_cabinet, load_articulated_object
-from strug_manip.objects.assembly import FRONT, GAP, scene_object_pose
+from strug_manip.objects.assembly import FRONT, GAP
 from strug_manip.objects.describe import describe_object
 from strug_manip.objects.generator import CabinetSpec
 from strug_manip.objects.loader import object_folders
 from strug_manip.world.perception_data import LabelledView, render_episode
-from strug_manip.world.scene import SceneConfig
+from strug_manip.world.scene import SceneConfig, cabinet_pose
 
 TYPES = ("fixed", "prismatic", "revolute")
 
@@ -337,7 +337,7 @@ def evaluate_cabinet(
         support_n += 1
         ok = False
         for p in particles:
-            T = scene_object_pose(p.spec.depth, 1.0, 0.0, 0.5)
+            T = cabinet_pose(p.spec.depth)
             for part in p.spec.parts:
                 if part.joint_type != tp["type"]:
                     continue

@@ -24,7 +24,7 @@ from collections.abc import Callable, Sequence
 import mujoco
 import numpy as np
 
-from strug_manip.control import timing
+import strug_manip.control.timing as timing
 from strug_manip.control.outcome import SkillStop, Status
 from strug_manip.robot.fetch import (
     ACTUATORS,

@@ -37,7 +37,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from strug_manip.control import timing
+import strug_manip.control.timing as timing
 from strug_manip.control.contacts import ContactChecker
 from strug_manip.control.ik import FetchIK
 from strug_manip.control.outcome import SkillStop, Status

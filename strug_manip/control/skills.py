@@ -65,6 +65,7 @@ from strug_manip.control.plan import (
     retreat_poses,
     straight,
 )
+from strug_manip.control.twin import PlanningTwin
 from strug_manip.objects.hypotheses import BelievedJoint, check_pose
 from strug_manip.world.scene import OBJECT_HALF_SIZE
 from strug_manip.world.sim import ManipulationWorld
@@ -124,15 +125,13 @@ class Skill:
 
     def simulate(
         self,
-        twin: object,
+        twin: PlanningTwin,
         params: SkillParams = DEFAULT_PARAMS,
         plan_world: ManipulationWorld | None = None,
     ) -> Outcome:
         """Execute on a planning twin (:class:`~strug_manip.control.twin.PlanningTwin`):
         physics in the twin's cabinet, the plan made against ``plan_world`` (the world
         the robot believes in, as for :meth:`run`; default: the twin's own cabinet)."""
-        from strug_manip.control.twin import PlanningTwin
-
         if not isinstance(twin, PlanningTwin):
             raise ConfigError(f"twin must be a PlanningTwin, got {twin!r}")
         if plan_world is not None and not isinstance(plan_world, ManipulationWorld):

@@ -65,8 +65,8 @@ import numpy as np
 from mujoco import rollout
 from scipy.optimize import linprog
 
+import strug_manip.control.timing as timing
 from planners.errors import ConfigError
-from strug_manip.control import timing
 from strug_manip.control.base_servo import BaseServo, base_inertia
 from strug_manip.control.contacts import HAND_BODIES
 from strug_manip.control.context import ControlContext

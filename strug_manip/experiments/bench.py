@@ -22,17 +22,14 @@ from pathlib import Path
 from typing import Any
 
 from planners.errors import ConfigError, UnknownNameError, check_positive_int
-from planners.solvers import SOLVERS, make_solver
+from planners.solvers import SOLVERS
 from strug_manip.domains import (
-    MANIPULATION_DOMAINS,
-    MANIPULATION_PARTICLES,
-    MANIPULATION_SIMS,
     domain_class,
-    make_domain,
 )
-from strug_manip.experiments.episode import DEFAULT_PARTICLES, run_episode
+from strug_manip.experiments.episode import DEFAULT_PARTICLES
 from strug_manip.experiments.executors import EXECUTORS, run_local, run_ray
 from strug_manip.experiments.table import summarize, to_markdown, write_csv, write_png
+from strug_manip.experiments.task import run_task, solver_config
 from strug_manip.objects.loader import object_folders
 
 RESULTS = "results.jsonl"
@@ -94,64 +91,6 @@ class BenchSpec:
         """Every (domain, solver, seed), seeds innermost-last so early rows fill first."""
         seeds = range(self.first_seed, self.first_seed + self.seeds)
         return [(d, s, k) for k in seeds for d in self.domains for s in self.solvers]
-
-
-def solver_config(solver: str, overrides: dict[str, Any]) -> Any:
-    """The config of ``solver`` with the overrides it has a field for."""
-    fields = SOLVERS[solver].field_names()
-    return make_solver(solver, {k: v for k, v in overrides.items() if k in fields})
-
-
-def budget_for(domain: str, overrides: dict[str, Any]) -> dict[str, Any]:
-    """``overrides`` with the manipulation tasks' default budget where they set none:
-    :data:`~strug_manip.domains.MANIPULATION_SIMS` simulations per decision (the
-    solvers' 3000 are sized for the toy domains, whose steps cost microseconds, not the
-    tens of milliseconds of a twin's skill) and
-    :data:`~strug_manip.domains.MANIPULATION_PARTICLES` root particles."""
-    if domain not in MANIPULATION_DOMAINS:
-        return overrides
-    out = {"particles": MANIPULATION_PARTICLES, **overrides}
-    if "sims" not in overrides and "time_limit" not in overrides:
-        out["sims"] = MANIPULATION_SIMS
-    return out
-
-
-def run_task(
-    task: tuple[str, str, int],
-    overrides: dict[str, Any],
-    n_particles: int,
-    objects: tuple[str, ...] = (),
-) -> dict:
-    """Run one episode and return its result record (executed in a worker).
-
-    Every record has the return, the steps, the wall time, the mean simulations and the
-    median planning time per step [s]; a manipulation episode's also ``success`` (the
-    +10: the object rests in the target part) and the domain's report (where the time
-    went, the outcome cache's hit rate). ``objects``: real object folders the
-    manipulation tasks act on (:attr:`BenchSpec.objects`)."""
-    domain, solver, seed = task
-    on_objects = bool(objects) and domain in MANIPULATION_DOMAINS
-    pomdp = make_domain(domain, objects=objects) if on_objects else make_domain(domain)
-    result = run_episode(
-        pomdp, solver_config(solver, budget_for(domain, overrides)), seed, n_particles=n_particles
-    )
-    plan = [s.plan_seconds for s in result.steps]
-    rec = {
-        "domain": domain,
-        "solver": solver,
-        "seed": seed,
-        "return": result.discounted_return,
-        "steps": len(result.steps),
-        "seconds": round(result.seconds, 4),
-        "mean_sims": result.mean_sims,
-        "plan_seconds_median": round(statistics.median(plan), 4) if plan else 0.0,
-    }
-    report = getattr(pomdp, "report", None)
-    if report is not None:
-        rec["success"] = any(s.reward > 0 for s in result.steps)
-        rec["report"] = report()
-        pomdp.close()
-    return rec
 
 
 #: The fields of a record that measure wall time (they differ between equal runs).

@@ -31,6 +31,7 @@ from collections.abc import Callable, Sequence
 from typing import IO, Any
 
 from planners.errors import ConfigError, PlannersError
+from strug_manip.experiments.task import run_task
 
 Task = tuple[str, str, int]
 Record = Callable[[dict[str, Any]], None]
@@ -50,7 +51,7 @@ def run_local(
     objects: Sequence[str] = (),
 ) -> None:
     """Run ``todo`` in ``workers`` local processes, one task in flight each
-    (``objects``: real object folders, as :func:`~strug_manip.experiments.bench.run_task`)."""
+    (``objects``: real object folders, as :func:`~strug_manip.experiments.task.run_task`)."""
     procs = [_start_worker(overrides, n_particles, objects) for _ in range(workers)]
     sel = selectors.DefaultSelector()
     queue, busy = list(reversed(todo)), 0
@@ -132,7 +133,7 @@ def run_ray(
     """Run ``todo`` as Ray tasks, at most ``2 * workers`` in flight (``ray.wait``).
 
     Args:
-        objects: real object folders (:func:`~strug_manip.experiments.bench.run_task`).
+        objects: real object folders (:func:`~strug_manip.experiments.task.run_task`).
         address: a Ray cluster to join (e.g. ``"ray://head:10001"`` or ``"auto"``);
             ``None`` starts a local instance with ``workers`` CPUs. Cluster nodes need
             strug-manip (and a user domain's module) installed.
@@ -143,8 +144,6 @@ def run_ray(
         raise ConfigError(
             "--executor ray needs Ray: pip install 'strug-manip[ray]' (or: pip install ray)"
         ) from None
-    from strug_manip.experiments.bench import run_task
-
     if address is None:
         kwargs: dict[str, Any] = {
             "num_cpus": workers,
@@ -216,8 +215,6 @@ def _die_with(parent: int) -> None:
 
 
 def _serve(requests: IO[str], replies: IO[str]) -> None:
-    from strug_manip.experiments.bench import run_task
-
     setup = json.loads(requests.readline())
     for line in requests:
         task = tuple(json.loads(line))

@@ -11,12 +11,12 @@ world. :func:`assemble` turns it into a
 door panels, handles, masses, joints, interiors) that
 ``ManipulationWorld.from_cabinet_spec`` compiles like a generated one.
 
-Where the spec is placed: the scene stands any cabinet spec with its front plane
-:data:`~strug_manip.world.scene.STAND_SETBACK` behind the cabinet table's edge, facing
-the robot (:func:`scene_object_pose`). Everything perceived in the world frame is
-expressed in that placement's object frame, so a particle's parts are where perception
-saw them; box geoms keep the object frame's axes (a perceived yaw of the front of a
-degree or two tilts joint axes, not boards).
+Where the spec is placed: the caller gives the object frame's pose in the world, as
+the scene stands a spec of that depth (:func:`strug_manip.world.scene.cabinet_pose`:
+its front plane behind the cabinet table's edge, facing the robot). Everything
+perceived in the world frame is expressed in that placement's object frame, so a
+particle's parts are where perception saw them; box geoms keep the object frame's axes
+(a perceived yaw of the front of a degree or two tilts joint axes, not boards).
 
 What perception cannot see is set to documented values (the middle of the generator's
 ranges, :mod:`strug_manip.objects.generator`): board thickness :data:`WALL` [m], front
@@ -222,20 +222,6 @@ def on_stand(model: CabinetModel, stand: float) -> CabinetModel:
     return CabinetModel(model.width, model.height - dz, model.depth, parts, T)
 
 
-def scene_object_pose(
-    depth: float, cabinet_distance: float, lateral: float, stand: float
-) -> np.ndarray:
-    """Where the scene puts the object frame of a cabinet spec ``depth`` deep (the
-    cabinet table's placement in :func:`strug_manip.world.scene.build_scene`), (4, 4)."""
-    from strug_manip.world.scene import STAND_SETBACK
-
-    if not stand > 0:
-        raise ConfigError("assembled cabinets stand on the cabinet table (stand_height > 0)")
-    T = np.diag([-1.0, -1.0, 1.0, 1.0])  # yaw pi: the front faces the robot
-    T[:3, 3] = [cabinet_distance + STAND_SETBACK + depth / 2, lateral, stand]
-    return T
-
-
 def _carcass(m: CabinetModel, cells: list[tuple[float, float, float, float]]) -> list[Geom]:
     """Carcass boards in the front frame: sides, top, bottom, back, and boards framing
     every cell."""
@@ -369,21 +355,21 @@ def _part_geoms(
 
 
 def assemble(
-    model: CabinetModel,
-    cabinet_distance: float = 1.0,
-    lateral: float = 0.0,
-    stand: float = 0.5,
+    model: CabinetModel, T_world_object: np.ndarray
 ) -> tuple[CabinetSpec, dict[str, float]]:
-    """The :class:`CabinetSpec` of ``model``, placed as the scene places a spec (the
-    defaults are :class:`~strug_manip.world.scene.SceneConfig`'s), and the parts'
-    current joint positions ``{joint name: q}`` (``ManipulationWorld.reset`` takes them).
+    """The :class:`CabinetSpec` of ``model`` in the object frame at ``T_world_object``
+    (4, 4) (where the scene stands a spec of ``model.depth``:
+    :func:`strug_manip.world.scene.cabinet_pose`), and the parts' current joint
+    positions ``{joint name: q}`` (``ManipulationWorld.reset`` takes them).
 
     Raises:
-        ConfigError: a malformed model.
+        ConfigError: a malformed model or pose.
     """
     if not isinstance(model, CabinetModel):
         raise ConfigError(f"model must be a CabinetModel, got {model!r}")
-    T_wo = scene_object_pose(model.depth, cabinet_distance, lateral, stand)
+    T_wo = np.asarray(T_world_object, dtype=float)
+    if T_wo.shape != (4, 4) or not np.all(np.isfinite(T_wo)):
+        raise ConfigError(f"T_world_object must be a finite (4, 4) pose, got {T_world_object!r}")
     A = np.linalg.inv(T_wo) @ np.asarray(model.T_world_front, dtype=float)
     R, b = A[:3, :3], A[:3, 3]
 

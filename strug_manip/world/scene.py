@@ -229,6 +229,28 @@ def _add_stand(
             )
 
 
+def cabinet_pose(
+    depth: float,
+    cabinet_distance: float = 1.0,
+    lateral: float = 0.0,
+    stand: float = STAND_HEIGHT,
+) -> np.ndarray:
+    """Where the scene stands a cabinet ``depth`` deep on its table (the defaults are
+    :class:`SceneConfig`'s): the object frame turned to face the robot (yaw pi), its
+    front plane :data:`STAND_SETBACK` behind the table's edge at ``cabinet_distance``,
+    on the table's top ``stand`` high, (4, 4) [m] (:func:`build_scene` then raises a
+    cabinet whose glides reach below its frame by that much).
+
+    Raises:
+        ConfigError: ``stand`` is not > 0 (a cabinet on the floor has no table).
+    """
+    if not stand > 0:
+        raise ConfigError("cabinets stand on the cabinet table (stand_height > 0)")
+    T = np.diag([-1.0, -1.0, 1.0, 1.0])  # yaw pi: the front faces the robot
+    T[:3, 3] = [cabinet_distance + STAND_SETBACK + depth / 2, lateral, stand]
+    return T
+
+
 def build_scene(config: SceneConfig) -> SceneModel:
     """Build the scene of ``config``, in memory (a generated or given cabinet is never
     written to disk; a ``cabinet_folder`` is read from it)."""
@@ -300,9 +322,10 @@ def build_scene(config: SceneConfig) -> SceneModel:
     yaw = math.pi
     if config.stand_height > 0:
         # The object frame's origin is the footprint's centre (generated and loaded).
-        front = cab_spec.depth / 2
-        x = config.cabinet_distance + STAND_SETBACK + front
-        pos = [x, config.cabinet_lateral, config.stand_height]
+        T_stand = cabinet_pose(
+            cab_spec.depth, config.cabinet_distance, config.cabinet_lateral, config.stand_height
+        )
+        pos = [float(v) for v in T_stand[:3, 3]]
         size = cabinet.bounds[1, :2] - cabinet.bounds[0, :2]
         _add_stand(
             world, config.cabinet_distance, config.cabinet_lateral, size, config.stand_height

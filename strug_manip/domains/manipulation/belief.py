@@ -65,6 +65,7 @@ from strug_manip.objects.assembly import (
     on_stand,
 )
 from strug_manip.objects.generator import CabinetSpec, axis_angle
+from strug_manip.world.scene import cabinet_pose
 
 #: Opening axis of a door hinged on each side, front frame (the generator's e x n).
 SIDE_AXES = {
@@ -375,7 +376,7 @@ def sample_particles(
         model = on_stand(
             CabinetModel(float(width), float(height), float(depth), tuple(parts),
                          front.T_world_front), scene[2])  # fmt: skip
-        spec, q = assemble(model, *scene)
+        spec, q = assemble(model, cabinet_pose(model.depth, *scene))
         order = sorted(range(len(parts)), key=lambda i: (-parts[i].rect[3], parts[i].rect[0]))
         out.append(Particle(model, spec, q, tuple(source[i] for i in order), run))
     return out
@@ -451,7 +452,7 @@ def with_open_cell(
         _overlaps(above.rect, o.rect) for o in m.parts) else ()  # fmt: skip
     parts = (*m.parts, cell, *extra)
     model = dataclasses.replace(m, parts=parts)
-    spec, q = assemble(model, *scene)
+    spec, q = assemble(model, cabinet_pose(model.depth, *scene))
     # Per part of the spec (top to bottom, left to right), the fused hypothesis it
     # came from: -1 for the cells, which no hypothesis holds.
     source = dict(zip(sorted(range(len(m.parts)), key=lambda i: (-m.parts[i].rect[3],

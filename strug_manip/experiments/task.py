@@ -1,0 +1,78 @@
+"""One bench task: a (domain, solver, seed) episode run to its result record.
+
+What the driver (:mod:`strug_manip.experiments.bench`) and its workers
+(:mod:`strug_manip.experiments.executors`) both call: the solver's config with the
+run's overrides, the manipulation tasks' default budget, and the episode itself.
+"""
+
+from __future__ import annotations
+
+import statistics
+from typing import Any
+
+from planners.solvers import SOLVERS, make_solver
+from strug_manip.domains import (
+    MANIPULATION_DOMAINS,
+    MANIPULATION_PARTICLES,
+    MANIPULATION_SIMS,
+    make_domain,
+)
+from strug_manip.experiments.episode import run_episode
+
+
+def solver_config(solver: str, overrides: dict[str, Any]) -> Any:
+    """The config of ``solver`` with the overrides it has a field for."""
+    fields = SOLVERS[solver].field_names()
+    return make_solver(solver, {k: v for k, v in overrides.items() if k in fields})
+
+
+def budget_for(domain: str, overrides: dict[str, Any]) -> dict[str, Any]:
+    """``overrides`` with the manipulation tasks' default budget where they set none:
+    :data:`~strug_manip.domains.MANIPULATION_SIMS` simulations per decision (the
+    solvers' 3000 are sized for the toy domains, whose steps cost microseconds, not the
+    tens of milliseconds of a twin's skill) and
+    :data:`~strug_manip.domains.MANIPULATION_PARTICLES` root particles."""
+    if domain not in MANIPULATION_DOMAINS:
+        return overrides
+    out = {"particles": MANIPULATION_PARTICLES, **overrides}
+    if "sims" not in overrides and "time_limit" not in overrides:
+        out["sims"] = MANIPULATION_SIMS
+    return out
+
+
+def run_task(
+    task: tuple[str, str, int],
+    overrides: dict[str, Any],
+    n_particles: int,
+    objects: tuple[str, ...] = (),
+) -> dict:
+    """Run one episode and return its result record (executed in a worker).
+
+    Every record has the return, the steps, the wall time, the mean simulations and the
+    median planning time per step [s]; a manipulation episode's also ``success`` (the
+    +10: the object rests in the target part) and the domain's report (where the time
+    went, the outcome cache's hit rate). ``objects``: real object folders the
+    manipulation tasks act on (:attr:`~strug_manip.experiments.bench.BenchSpec.objects`)."""
+    domain, solver, seed = task
+    on_objects = bool(objects) and domain in MANIPULATION_DOMAINS
+    pomdp = make_domain(domain, objects=objects) if on_objects else make_domain(domain)
+    result = run_episode(
+        pomdp, solver_config(solver, budget_for(domain, overrides)), seed, n_particles=n_particles
+    )
+    plan = [s.plan_seconds for s in result.steps]
+    rec = {
+        "domain": domain,
+        "solver": solver,
+        "seed": seed,
+        "return": result.discounted_return,
+        "steps": len(result.steps),
+        "seconds": round(result.seconds, 4),
+        "mean_sims": result.mean_sims,
+        "plan_seconds_median": round(statistics.median(plan), 4) if plan else 0.0,
+    }
+    report = getattr(pomdp, "report", None)
+    if report is not None:
+        rec["success"] = any(s.reward > 0 for s in result.steps)
+        rec["report"] = report()
+        pomdp.close()
+    return rec
