@@ -1,5 +1,6 @@
-"""The manipulation episode's rerun recording: geometry, poses, camera, joints, replay; and
-the PNG strip of camera images."""
+"""The manipulation episode's rerun recording: geometry, poses, camera, joints, replay, the
+belief per part and the blueprint (the layout the viewer opens with); and the PNG strip of
+camera images."""
 
 from __future__ import annotations
 
@@ -13,12 +14,20 @@ import pytest
 import rerun as rr
 
 from planners.errors import ConfigError
+from planners.particles import ParticleBelief
 from strug_manip.control.outcome import Outcome, Status
+from strug_manip.domains.manipulation.actions import CataloguePart
+from strug_manip.experiments.rerun_log import (
+    MANIPULATION_VIEWS,
+    ManipulationLog,
+    manipulation_blueprint,
+)
 from strug_manip.experiments.rerun_manip import (
     WorldLogger,
     episode_strip,
     log_camera,
     log_joints,
+    scene_eye,
 )
 from strug_manip.objects.hypotheses import BelievedJoint
 from strug_manip.world import ManipulationWorld, SceneConfig
@@ -193,3 +202,94 @@ def test_episode_strip_puts_the_images_side_by_side(
     h, w = imread(out).shape[:2]
     assert w == 180  # three 60 px images at their native resolution
     assert h == 40 if labels is None else 40 < h < 80  # a title band above
+
+
+def _blueprint(path: Path) -> dict[str, dict[str, list]]:
+    """The recording's blueprint: view title -> its components and its properties' (the
+    last row of each, keyed ``Archetype:field``), with ``origin`` and ``class``."""
+    from rerun.chunk import RrdReader
+
+    reader = RrdReader(path)
+    (store,) = reader.blueprints()
+    rows: dict[str, dict[str, list]] = {}
+    for chunk in reader.stream(store=store).to_chunks():
+        parts = chunk.entity_path.split("/")  # /view/<id>[/Property]
+        if parts[1] != "view":
+            continue
+        batch = chunk.to_record_batch()
+        view = rows.setdefault(parts[2], {})
+        for name in batch.schema.names:
+            if ":" in name:
+                view[name] = batch.column(name)[-1].as_py()
+    views = {}
+    for props in rows.values():
+        if "ViewBlueprint:display_name" in props:
+            props["origin"] = "/" + props["ViewBlueprint:space_origin"][0].strip("/")
+            props["class"] = props["ViewBlueprint:class_identifier"][0]
+            views[props["ViewBlueprint:display_name"][0]] = props
+    return views
+
+
+def test_blueprint_names_its_views_and_looks_at_the_robot_and_the_cabinet(
+    world: ManipulationWorld, tmp_path: Path
+) -> None:
+    path, stream = _recording(tmp_path, "blueprint")
+    WorldLogger(stream, world)
+    eye, target = scene_eye(world)
+    stream.send_blueprint(manipulation_blueprint((eye, target)))
+    stream.disconnect()
+    _verify(path)
+
+    views = _blueprint(path)
+    assert set(views) == set(MANIPULATION_VIEWS)
+    scene = views["scene"]
+    assert (scene["class"], scene["origin"]) == ("3D", "/world")
+    assert {"+ /world/**", "+ /belief/joints", "+ /camera_cloud", "- /camera/image/depth"} <= set(
+        scene["ViewContents:query"]
+    )
+    np.testing.assert_allclose(scene["EyeControls3D:position"][0], eye, atol=1e-5)
+    np.testing.assert_allclose(scene["EyeControls3D:look_target"][0], target, atol=1e-5)
+    for name, image in (("head camera: colour", "rgb"), ("head camera: depth [m]", "depth")):
+        view = views[name]
+        assert (view["class"], view["origin"]) == ("2D", "/camera/image")
+        assert view["ViewContents:query"] == [f"$origin/{image}"]
+    assert (views["belief per part"]["class"], views["belief per part"]["origin"]) == (
+        "TextDocument",
+        "/belief/parts",
+    )
+    assert views["Q per action"]["origin"] == "/search/q_table"
+    assert (views["step log"]["class"], views["step log"]["origin"]) == ("TextLog", "/log")
+    # The eye: behind the robot (the cabinet ahead along +x), above, looking between them.
+    m, d = world.model, world.data
+    base, cabinet = d.xpos[m.body("base_link").id], d.xpos[m.body("cabinet/base").id]
+    assert base[0] < target[0] < cabinet[0] and eye[0] < base[0] and eye[2] > 1.2
+
+
+def test_belief_per_part_is_a_table_and_a_named_series_per_hypothesis(tmp_path: Path) -> None:
+    from types import SimpleNamespace
+
+    path, stream = _recording(tmp_path, "parts")
+    parts = (
+        CataloguePart(np.array([1.0, 0.1, 1.17]), ("a", "a", "a"), ("drawer", "left"), (0, 1)),
+        CataloguePart(np.array([1.0, 0.1, 0.80]), ("b", None, "b"), ("drawer",), (0,)),
+    )
+    classes = {0: ("drawer", "drawer"), 1: ("left", None), 2: ("drawer", "drawer")}
+    pomdp = SimpleNamespace(parts=parts, entropy_key=classes.__getitem__)
+    belief = ParticleBelief([0, 1, 2], np.array([0.5, 0.25, 0.25]), np.arange(3))
+    stream.set_time("step", sequence=0)
+    ManipulationLog(stream)._log_parts(pomdp, belief)
+    stream.disconnect()
+
+    rows = _rows(path)
+    (table,) = rows["/belief/parts"]["TextDocument:text"][0]
+    lines = table.splitlines()
+    assert lines[0].startswith("belief after the step: ESS 2.7 of 3")
+    assert lines[4].startswith("| part@(y=+0.10, z=1.17) | drawer |") and lines[4].endswith(
+        "| 0.75 |"
+    )
+    assert lines[5].startswith("|  | left |") and lines[5].endswith("| 0.25 |")
+    assert lines[6].startswith("| part@(y=+0.10, z=0.80) | drawer |")
+    assert lines[7].startswith("|  | absent |") and lines[7].endswith("| 0.25 |")
+    series = rows["/belief/part_mass/part1/absent"]
+    assert series["Scalars:scalars"][-1] == [0.25]
+    assert series["SeriesLines:names"][0] == ["part@(y=+0.10, z=0.80) absent"]

@@ -25,14 +25,26 @@ Per step (timeline ``step``):
   action, labelled ``action Q (visits)``, the chosen action drawn in orange; on finite
   action spaces also ``search/q/<action>`` and ``search/bonus/<action>`` series
   (continuous actions are new every step, so no series each);
+* ``search/q_table``: the same root Q values as a text table (action, Q as a bar of
+  block characters, visits, bonus; the chosen action marked): rerun's ``BarChart``
+  carries no per-bar labels, and long action names do not fit under bars;
 * ``log``: one line per step, action -> observation.
+
+The timelines are ``step`` (the episode's steps) and, for the manipulation tasks,
+``sim_time`` (simulated seconds); rerun's wall-clock ``log_time`` is left out.
+
+Every recording carries a blueprint (the layout the viewer opens with, :func:`blueprint`
+and :func:`manipulation_blueprint`): the scene large, the step log, the labelled tables
+and the statistics in tabs.
 
 The manipulation tasks (:class:`ManipulationLog`) log instead, under ``world/``, the
 robot's and the cabinet's MuJoCo geoms (static, per body) posed at every recorded
 frame of every skill the real robot ran (timeline ``sim_time``, the episode's
 simulated time), the head camera's images and the cabinet cloud it saw after each
 step (``camera``, ``camera_cloud``), and the belief: every particle's joints of the
-cabinet's parts as arrows on the cabinet, darker for more weight (``belief/joints``).
+cabinet's parts as arrows on the cabinet, darker for more weight (``belief/joints``);
+the belief per catalogued part, the mass of each kinematic hypothesis, as a text table
+(``belief/parts``) and one named series each (``belief/part_mass/<part>/<hypothesis>``).
 """
 
 from __future__ import annotations
@@ -79,6 +91,40 @@ def labelled_bars(
     return rr.Boxes2D(mins=mins, sizes=sizes, labels=list(labels), colors=colors, show_labels=True)
 
 
+#: Width of a :func:`text_bar` at its largest [characters].
+BAR_WIDTH = 12
+
+
+def text_bar(value: float, top: float) -> str:
+    """``value`` as a bar of block characters, :data:`BAR_WIDTH` long at ``|value| =
+    top``, in eighths; a negative value's bar starts with a minus sign."""
+    frac = min(abs(value) / top, 1.0) if top > 0 else 0.0
+    eighths = round(frac * 8 * BAR_WIDTH)
+    bar = (
+        "\u2588" * (eighths // 8) + ("", *"\u258f\u258e\u258d\u258c\u258b\u258a\u2589")[eighths % 8]
+    )
+    return ("\u2212" if value < 0 and bar else "") + (bar or "\u00b7")
+
+
+def _cell(text: str) -> str:
+    """``text`` safe inside a markdown table cell."""
+    return text.replace("|", "\\|")
+
+
+def q_table(rec: StepRecord) -> str:
+    """Markdown: one row per root action of ``rec`` (its Q value, as a bar and a number,
+    its visits and bonus), the chosen action marked and in bold."""
+    top = max((abs(q) for q in rec.q.values()), default=0.0)
+    rows = [f"step {rec.step}: root Q per action (chosen: \u25b6)", "",
+            "| | action | Q | | visits | bonus |", "|---|---|---|---:|---:|---:|"]  # fmt: skip
+    for a, q in rec.q.items():
+        mark, name = ("\u25b6", f"**{_cell(a)}**") if a == rec.action else ("", _cell(a))
+        bonus = f"{rec.bonus[a]:+.3f}" if a in rec.bonus else ""
+        rows.append(f"| {mark} | {name} | {text_bar(q, top)} | {q:+.2f} | "
+                    f"{rec.visits.get(a, 0)} | {bonus} |")  # fmt: skip
+    return "\n".join(rows)
+
+
 class RerunRecorder:
     """Writes one episode to a ``.rrd`` file as it runs.
 
@@ -94,12 +140,16 @@ class RerunRecorder:
         self.rr = rr
         self.pomdp = pomdp
         self.stream = rr.RecordingStream(app)
+        self.stream.set_log_time_enabled(False)  # timelines: step (and sim_time)
         self.stream.save(str(path))
         self._return = 0.0
         self._path: list[np.ndarray] = []
+        self._named: set[str] = set()
         self.discrete_actions = pomdp.action_space().is_discrete
         self.manipulation = ManipulationLog(self.stream) if hasattr(pomdp, "real") else None
         self._log_geometry()
+        if self.manipulation is None:  # the manipulation's, once its world exists
+            self.stream.send_blueprint(blueprint(pomdp))
 
     def _log_geometry(self) -> None:
         rr, log, p = self.rr, self.stream.log, self.pomdp
@@ -210,12 +260,20 @@ class RerunRecorder:
             labels = [f"{a} {rec.q[a]:+.2f} ({rec.visits.get(a, 0)})" for a in names]
             chosen = names.index(rec.action) if rec.action in rec.q else None
             log("search/q_root", labelled_bars(rr, list(rec.q.values()), labels, chosen))
+            log("search/q_table", rr.TextDocument(q_table(rec), media_type="text/markdown"))
             log("search/q_best", rr.Scalars(max(rec.q.values())))
         if self.discrete_actions:  # stable action names: one series each
             for action, q in rec.q.items():
-                log(f"search/q/{_path_part(action)}", rr.Scalars(q))
+                self._series(f"search/q/{_path_part(action)}", action, q)
             for action, b in rec.bonus.items():
-                log(f"search/bonus/{_path_part(action)}", rr.Scalars(b))
+                self._series(f"search/bonus/{_path_part(action)}", action, b)
+
+    def _series(self, entity: str, name: str, value: float) -> None:
+        """Log ``value`` on the series ``entity``, named ``name`` in plot legends."""
+        if entity not in self._named:
+            self._named.add(entity)
+            self.stream.log(entity, self.rr.SeriesLines(names=[name]), static=True)
+        self.stream.log(entity, self.rr.Scalars(value))
 
     def _log_world(self, state: Any, obs_text: str) -> None:
         rr, log = self.rr, self.stream.log
@@ -257,11 +315,12 @@ class ManipulationLog:
         self.t = 0.0
         self.outcomes = 0
         self.frames = 0
+        self.named: set[str] = set()
 
     def log_step(self, pomdp: Any, belief: ParticleBelief | None) -> None:
         """Everything new since the last step: the real robot's runs, camera frames and
         the belief after the update."""
-        from strug_manip.experiments.rerun_manip import WorldLogger, log_camera
+        from strug_manip.experiments.rerun_manip import WorldLogger, log_camera, scene_eye
         from strug_manip.world.views import cabinet_cloud
 
         real = pomdp.real
@@ -269,6 +328,7 @@ class ManipulationLog:
             return
         if self.world_log is None:
             self.world_log = WorldLogger(self.stream, real.world, "world")
+            self.stream.send_blueprint(manipulation_blueprint(scene_eye(real.world)))
         for out in real.outcomes[self.outcomes :]:
             self.t = self.world_log.log_replay(out, self.t, every=2)
         self.outcomes = len(real.outcomes)
@@ -278,6 +338,38 @@ class ManipulationLog:
         self.frames = len(real.frames)
         if belief is not None and pomdp.worlds is not None:
             self._log_belief(pomdp, belief)
+            self._log_parts(pomdp, belief)
+
+    def _log_parts(self, pomdp: Any, belief: ParticleBelief) -> None:
+        """The mass of each kinematic hypothesis of each catalogued part (its particles'
+        :meth:`entropy_key`; ``absent``: no such part, or an open cell): a table
+        (``belief/parts``) and one named series each (``belief/part_mass/...``)."""
+        import rerun as rr
+
+        parts = pomdp.parts
+        mass = [{h: 0.0 for h in p.hypotheses if h != "shelf"} for p in parts]
+        for s, wt in zip(belief.states, belief.weights.tolist(), strict=True):
+            key = pomdp.entropy_key(s)
+            for k in range(len(parts)):
+                kind = "absent" if key is None or key[k] is None else str(key[k])
+                mass[k][kind] = mass[k].get(kind, 0.0) + wt
+        total = max(float(np.sum(belief.weights)), 1e-300)
+        rows = [f"belief after the step: ESS {belief.ess():.1f} of {len(belief)} particles",
+                "", "| part | hypothesis | mass | |", "|---|---|---|---:|"]  # fmt: skip
+        for k, (part, by_kind) in enumerate(zip(parts, mass, strict=True)):
+            for j, (kind, m) in enumerate(by_kind.items()):
+                p = m / total
+                where = part.describe() if j == 0 else ""
+                rows.append(f"| {where} | {kind} | {text_bar(p, 1.0)} | {p:.2f} |")
+                entity = f"belief/part_mass/part{k}/{_path_part(kind)}"
+                if entity not in self.named:
+                    self.named.add(entity)
+                    name = f"{part.describe()} {kind}"
+                    self.stream.log(entity, rr.SeriesLines(names=[name]), static=True)
+                self.stream.log(entity, rr.Scalars(p))
+        self.stream.log(
+            "belief/parts", rr.TextDocument("\n".join(rows), media_type="text/markdown")
+        )
 
     def _log_belief(self, pomdp: Any, belief: ParticleBelief) -> None:
         from strug_manip.experiments.rerun_manip import log_joints
@@ -302,3 +394,160 @@ class ManipulationLog:
             log_joints(
                 self.stream, "belief/joints", joints, np.array(weights), origins=np.array(origins)
             )
+
+
+# --- blueprints: the layout the viewer opens a recording with ----------------------------
+
+#: Names of the views of :func:`manipulation_blueprint`, as the viewer titles them.
+MANIPULATION_VIEWS = (
+    "scene",
+    "head camera: colour",
+    "head camera: depth [m]",
+    "belief per part",
+    "Q per action",
+    "step log",
+    "return",
+    "search",
+    "Q per action over steps",
+    "belief per part over steps",
+)
+#: Names of the views of :func:`blueprint` (a toy domain's): every domain's, then those
+#: only the Tigers' (``observation``, ``belief mass``) or the finite action spaces' have.
+TOY_VIEWS = (
+    "world",
+    "Q per action",
+    "step log",
+    "return",
+    "search",
+    "Q bars",
+    "Q per action over steps",
+    "observation",
+    "belief mass",
+)
+
+
+def _statistics(rrb: Any, *extra: Any) -> Any:
+    """Tabs of time series: the return and reward, the search's statistics, ``extra``."""
+    return rrb.Tabs(
+        rrb.TimeSeriesView(name="return", origin="episode"),
+        rrb.TimeSeriesView(
+            name="search",
+            origin="search",
+            contents=["+ $origin/**", "- $origin/q/**", "- $origin/bonus/**"],
+        ),
+        *extra,
+    )
+
+
+def _step_log(rrb: Any) -> Any:
+    return rrb.TextLogView(
+        name="step log",
+        origin="log",
+        columns=rrb.TextLogColumns(text_log_columns=["Body"]),
+    )
+
+
+def _panels(rrb: Any, timeline: str) -> tuple[Any, ...]:
+    """Side panels collapsed (the viewport gets the room), the time bar on ``timeline``."""
+    return (
+        rrb.BlueprintPanel(state="collapsed"),
+        rrb.SelectionPanel(state="collapsed"),
+        rrb.TimePanel(state="collapsed", timeline=timeline),
+    )
+
+
+def manipulation_blueprint(eye: tuple[Sequence[float], Sequence[float]] | None = None) -> Any:
+    """The manipulation recording's layout (:data:`MANIPULATION_VIEWS`).
+
+    Left, large: the 3D ``scene`` (the robot, the cabinet, the believed joints, the
+    head camera's frustum and cloud; ``eye``: where it looks from and at, world [m]),
+    the ``step log`` below it. Right: the head camera's colour and depth side by side,
+    the ``belief per part`` and ``Q per action`` tables, and tabs of time series (the
+    return, the search's statistics, Q per action and the belief per part over the
+    steps). The time bar starts on the ``step`` timeline.
+    """
+    import rerun.blueprint as rrb
+
+    controls = None
+    if eye is not None:
+        controls = rrb.EyeControls3D(
+            kind=rrb.Eye3DKind.Orbital, position=eye[0], look_target=eye[1], eye_up=[0, 0, 1]
+        )
+    scene = rrb.Spatial3DView(
+        name="scene",
+        origin="world",
+        contents=[
+            "+ /world/**",
+            "+ /belief/joints",
+            "+ /camera/**",
+            "- /camera/image/depth",  # drawn as the cloud instead
+            "+ /camera_cloud",
+        ],
+        background=rrb.BackgroundKind.GradientBright,
+        eye_controls=controls,
+    )
+    camera = rrb.Horizontal(
+        rrb.Spatial2DView(
+            name="head camera: colour", origin="camera/image", contents="$origin/rgb"
+        ),
+        rrb.Spatial2DView(
+            name="head camera: depth [m]", origin="camera/image", contents="$origin/depth"
+        ),
+    )
+    stats = _statistics(
+        rrb,
+        rrb.TimeSeriesView(name="Q per action over steps", origin="search/q"),
+        rrb.TimeSeriesView(name="belief per part over steps", origin="belief/part_mass"),
+    )
+    right = rrb.Vertical(
+        camera,
+        rrb.TextDocumentView(name="belief per part", origin="belief/parts"),
+        rrb.TextDocumentView(name="Q per action", origin="search/q_table"),
+        stats,
+        row_shares=[3, 3, 3, 2],
+    )
+    left = rrb.Vertical(scene, _step_log(rrb), row_shares=[3, 1])
+    return rrb.Blueprint(
+        rrb.Horizontal(left, right, column_shares=[3, 2]),
+        *_panels(rrb, "step"),
+        auto_views=False,
+    )
+
+
+def blueprint(pomdp: Any) -> Any:
+    """A toy domain's layout (:data:`TOY_VIEWS`): the 2D ``world`` (geometry, true
+    state, observation, belief) and the ``step log`` left; the ``Q per action`` table
+    and tabs of time series and bars right."""
+    import rerun.blueprint as rrb
+
+    tabs = [rrb.Spatial2DView(name="Q bars", origin="search/q_root")]
+    if pomdp.action_space().is_discrete:
+        tabs.append(rrb.TimeSeriesView(name="Q per action over steps", origin="search/q"))
+    bounds = None
+    if isinstance(pomdp, LightDark2D):  # the room and a margin for what strays outside
+        span = [-1.0, pomdp.size + 1.0]
+        bounds = rrb.VisualBounds2D(x_range=span, y_range=span)
+    world = rrb.Spatial2DView(name="world", origin="world", visual_bounds=bounds)
+    left = [world]
+    if isinstance(pomdp, Tiger):  # the observation is text; the belief, bars per state
+        left = [
+            rrb.Horizontal(
+                world,
+                rrb.Vertical(
+                    rrb.TextDocumentView(name="observation", origin="world/observation"),
+                    rrb.Spatial2DView(name="belief mass", origin="belief/mass"),
+                    row_shares=[1, 3],
+                ),
+            )
+        ]
+    right = rrb.Vertical(
+        rrb.TextDocumentView(name="Q per action", origin="search/q_table"),
+        _statistics(rrb, *tabs),
+    )
+    return rrb.Blueprint(
+        rrb.Horizontal(
+            rrb.Vertical(*left, _step_log(rrb), row_shares=[3, 1]), right, column_shares=[3, 2]
+        ),
+        *_panels(rrb, "step"),
+        auto_views=False,
+    )

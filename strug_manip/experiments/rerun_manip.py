@@ -294,6 +294,27 @@ class WorldLogger:
         return float(t0 + times[-1])
 
 
+def scene_eye(world: ManipulationWorld) -> tuple[np.ndarray, np.ndarray]:
+    """Where a 3D view of the scene looks from and at, world (3,) [m] each: at the point
+    between the robot's base and the cabinet, from behind the robot's left shoulder
+    and above, so the robot, the cabinet's front and the table beside them are all in
+    view (no ``base_link`` body: the robot at the origin; no ``cabinet/`` bodies: the
+    cabinet 1 m ahead along +x)."""
+    m, d = world.model, world.data
+    names = [m.body(b).name for b in range(m.nbody)]
+    base = d.xpos[names.index("base_link")] if "base_link" in names else np.zeros(3)
+    cab = [d.xpos[b] for b, n in enumerate(names) if n.startswith("cabinet/")]
+    ahead = np.mean(cab, axis=0) if cab else base + np.array([1.0, 0.0, 0.0])
+    u = np.r_[(ahead - base)[:2], 0.0]
+    norm = float(np.linalg.norm(u))
+    u = u / norm if norm > 1e-9 else np.array([1.0, 0.0, 0.0])
+    reach = max(norm, 0.5)  # [m]: the view's scale
+    left = np.array([-u[1], u[0], 0.0])
+    target = np.r_[(0.4 * base + 0.6 * ahead)[:2], 0.7]
+    eye = target + reach * (-1.5 * u + 1.1 * left) + [0.0, 0.0, 1.0]
+    return eye, target
+
+
 def log_camera(
     stream: rr.RecordingStream, entity: str, frame: CameraFrame, cloud: np.ndarray | None
 ) -> None:
