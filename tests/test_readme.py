@@ -22,7 +22,7 @@ BLOCKS = python_blocks(README.read_text())
 
 
 def test_the_readme_has_its_python_blocks() -> None:
-    assert len(BLOCKS) >= 4  # two own-POMDP examples, skills, perception
+    assert len(BLOCKS) >= 5  # a manipulation trial, a skill, two own-POMDP examples, an object
     assert python_blocks("```bash\nls\n```\n```python\nx = 1\n```\n") == [(4, "x = 1\n")]
 
 
