@@ -248,3 +248,29 @@ def test_importing_meshes_first_leaves_pinocchio_able_to_parse_urdf() -> None:
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "1"
+
+
+def test_a_mesh_of_two_materials_keeps_each_and_its_texture_coordinates(tmp_path: Path) -> None:
+    (tmp_path / "images").mkdir()
+    (tmp_path / "objs").mkdir()
+    image = np.full((4, 4, 3), (30, 60, 90), np.uint8)
+    assert cv2.imwrite(str(tmp_path / "images" / "wood.jpg"), image)
+    mtl = "newmtl grain\nKd 1 1 1\nmap_Kd ../images/wood.jpg\nnewmtl plain\nKd 0.2 0.4 0.6\n"
+    (tmp_path / "objs" / "m.mtl").write_text(mtl)
+    text = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\n"
+    text += "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
+    text += "usemtl grain\nf 1/1 2/2 3/3 4/4\nusemtl plain\nf 1/1 2/2 5/3\n"
+    (tmp_path / "objs" / "two.obj").write_text(text)
+    mesh = read_obj(tmp_path / "objs" / "two.obj")
+    assert len(mesh.materials) == 2 and mesh.face_material.tolist() == [0, 0, 1]
+    assert mesh.materials[0].texture == tmp_path / "images" / "wood.jpg"
+    assert mesh.materials[1].texture is None
+    assert mesh.materials[1].rgba == pytest.approx((0.2, 0.4, 0.6, 1.0))
+    assert mesh.face_texcoords.tolist() == [[0, 1, 2], [0, 2, 3], [0, 1, 2]]
+    assert mesh.rgba == mesh.materials[0].rgba  # the dominant material: 2 faces of 3
+    # MuJoCo reads PNG, not JPEG: a PNG copy in the cache, the same pixels.
+    png = meshes.png_texture(mesh.materials[0].texture, tmp_path / "cache")
+    assert png.suffix == ".png" and png.parent == tmp_path / "cache" / "textures"
+    assert np.array_equal(cv2.imread(str(png)), cv2.imread(str(tmp_path / "images" / "wood.jpg")))
+    assert meshes.png_texture(png) == png
+    assert meshes.png_texture(tmp_path / "images" / "absent.jpg") is None

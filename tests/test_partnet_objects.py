@@ -193,3 +193,14 @@ def test_a_task_on_an_object_names_its_target_by_link(folders: dict[str, Path]) 
         assert task.real.world.scene.cabinet_spec.name == "mixed"
     finally:
         task.close()
+
+
+def test_a_textured_front_wears_its_texture(folders: dict[str, Path]) -> None:
+    """The fixture's drawer front has a PNG texture and texture coordinates: the loaded
+    model maps it (a material with the texture on the front's visual geom)."""
+    obj = load_articulated_object(folders["mixed"], progress=False)
+    m = obj.mj_model
+    assert m.ntex >= 1 and m.nmat >= 1
+    textured = [g for g in range(m.ngeom) if m.geom_matid[g] >= 0]
+    assert textured and all(m.geom_contype[g] == 0 for g in textured)  # visual geoms
+    assert all(m.mesh_texcoordnum[m.geom_dataid[g]] > 0 for g in textured)

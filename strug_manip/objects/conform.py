@@ -55,7 +55,7 @@ from strug_manip.objects.generator import (
     HEIGHT_RANGE,
     WIDTH_RANGE,
 )
-from strug_manip.objects.meshes import convex_pieces, read_obj
+from strug_manip.objects.meshes import ObjMesh, convex_pieces, png_texture, read_obj
 from strug_manip.objects.urdf import GeometryInfo, JointInfo, LinkInfo, ParsedUrdf, joint_tree
 
 #: Damping [N s/m] and Coulomb friction [N] of a drawer whose URDF gives none: the middle
@@ -132,13 +132,7 @@ def _with_pieces(
         if g.shape != "mesh" or g.mesh.suffix.lower() != ".obj":  # type: ignore[union-attr]
             visuals.append(g)
             continue
-        mesh = read_obj(g.mesh, textures)  # type: ignore[arg-type]
-        if len(mesh.faces) == 0:
-            continue
-        verts = mesh.vertices * np.asarray(g.scale)
-        visuals.append(
-            replace(g, vertices=verts, faces=mesh.faces, rgba=g.rgba or mesh.rgba, mesh=None)
-        )
+        visuals += _visual_parts(g, read_obj(g.mesh, textures), cache_dir)  # type: ignore[arg-type]
     return replace(link, collisions=tuple(collisions), visuals=tuple(visuals))
 
 
@@ -154,6 +148,34 @@ def geom_points(g: GeometryInfo) -> np.ndarray:
     else:
         h = np.full(3, g.size[0]) if g.size else np.zeros(3)
     return np.array([[i, j, k] for i in (-1, 1) for j in (-1, 1) for k in (-1, 1)]) * h
+
+
+def _visual_parts(g: GeometryInfo, mesh: ObjMesh, cache_dir: Path | None) -> list[GeometryInfo]:
+    """A visual OBJ as one geom per material (MuJoCo gives a geom one material): its
+    faces, their own vertices (scaled), and the material's texture (as a PNG) where the
+    faces have texture coordinates, else its colour."""
+    out = []
+    for k, mat in enumerate(mesh.materials):
+        faces = mesh.faces[mesh.face_material == k]
+        if len(faces) == 0:
+            continue
+        used, local = np.unique(faces, return_inverse=True)
+        png = None
+        if mat.texture is not None and mesh.face_texcoords is not None:
+            png = png_texture(mat.texture, cache_dir)
+        uv = {}
+        if png is not None:
+            uv = {
+                "texture": png,
+                "texcoords": mesh.texcoords,
+                "face_texcoords": mesh.face_texcoords[mesh.face_material == k],
+            }
+        rgba = g.rgba or (mat.tint if png is not None else mat.rgba)
+        verts = mesh.vertices[used] * np.asarray(g.scale)
+        out.append(
+            replace(g, vertices=verts, faces=local.reshape(-1, 3), rgba=rgba, mesh=None, **uv)
+        )
+    return out
 
 
 def link_points(urdf: ParsedUrdf, link: str, T_base_link: np.ndarray) -> np.ndarray:

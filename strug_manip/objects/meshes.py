@@ -89,6 +89,21 @@ _MIN_SPACING = 0.002  # [m] finest sample spacing in concavity(), about its erro
 
 
 @dataclass(frozen=True)
+class ObjMaterial:
+    """How one material of an OBJ mesh looks.
+
+    Attributes:
+        rgba: its colour [0..1]: ``Kd`` times its texture's mean colour, alpha ``d``.
+        tint: ``Kd`` and alpha, what a mapped texture is multiplied by.
+        texture: its ``map_Kd`` image file if that exists, else None.
+    """
+
+    rgba: tuple[float, float, float, float]
+    tint: tuple[float, float, float, float] = (1.0, 1.0, 1.0, 1.0)
+    texture: Path | None = None
+
+
+@dataclass(frozen=True)
 class ObjMesh:
     """A triangle mesh read from an OBJ file.
 
@@ -96,19 +111,26 @@ class ObjMesh:
         vertices: (n, 3) float64 vertex positions [m], in the OBJ's own frame.
         faces: (m, 3) int64 vertex indices of triangles (polygons fan-triangulated).
         rgba: colour of the material used by most triangles [0..1].
+        materials: the materials the faces use (at least one: a mesh without any
+            gets :data:`DEFAULT_RGBA`).
+        face_material: (m,) int64 index into ``materials`` of each face.
+        texcoords: (k, 2) texture coordinates (``vt`` lines), or None.
+        face_texcoords: (m, 3) int64 indices into ``texcoords`` of each face's
+            corners, or None when some face has none (no texture can be mapped).
     """
 
     vertices: np.ndarray
     faces: np.ndarray
     rgba: tuple[float, float, float, float]
+    materials: tuple[ObjMaterial, ...] = (ObjMaterial(DEFAULT_RGBA),)
+    face_material: np.ndarray | None = None
+    texcoords: np.ndarray | None = None
+    face_texcoords: np.ndarray | None = None
 
 
 def read_obj(path: Path, textures: dict[Path, np.ndarray | None] | None = None) -> ObjMesh:
-    """Reads the ``v``, ``f``, ``usemtl`` and ``mtllib`` lines of a Wavefront OBJ file.
-
-    The colour is the MTL ``Kd`` of the material used by most triangles, times the mean
-    colour of its ``map_Kd`` texture if that image reads, with alpha ``d`` (or ``1 - Tr``);
-    :data:`DEFAULT_RGBA` without material.
+    """Reads the ``v``, ``vt``, ``f``, ``usemtl`` and ``mtllib`` lines of a Wavefront OBJ
+    file and its materials (``Kd``, ``map_Kd``, ``d`` or ``Tr`` of the MTL libraries).
 
     Args:
         path: the OBJ file.
@@ -123,10 +145,38 @@ def read_obj(path: Path, textures: dict[Path, np.ndarray | None] | None = None) 
         text = path.read_bytes().decode("utf-8", errors="replace")
     except OSError as exc:
         raise ConfigError(f"cannot read OBJ file {path}: {exc}") from None
-    verts: list[list[float]] = []
-    tris: list[tuple[int, int, int]] = []
-    tri_mtl: list[str | None] = []
-    libs: list[str] = []
+    obj = _parse_obj(text, path)
+    cache = {} if textures is None else textures
+    names = list(dict.fromkeys(obj["tri_mtl"])) or [None]
+    materials = []
+    for name in names:
+        found = None if name is None else _material(path.parent, obj["libs"], name)
+        if found is None:
+            materials.append(ObjMaterial(DEFAULT_RGBA))
+            continue
+        texture, tint = _texture_of(*found)
+        materials.append(ObjMaterial(_props_rgba(*found, cache), tint, texture))
+    counts = Counter(obj["tri_mtl"])  # insertion-ordered: a tie goes to the first used
+    dominant = names.index(max(counts, key=counts.__getitem__)) if counts else 0
+    index = {n: k for k, n in enumerate(names)}
+    uvs, tri_uv = obj["uvs"], obj["tri_uv"]
+    mapped = bool(uvs) and all(0 <= t < len(uvs) for tri in tri_uv for t in tri)
+    return ObjMesh(
+        vertices=np.asarray(obj["verts"], dtype=np.float64),
+        faces=np.asarray(obj["tris"], dtype=np.int64).reshape(-1, 3),
+        rgba=materials[dominant].rgba,
+        materials=tuple(materials),
+        face_material=np.array([index[n] for n in obj["tri_mtl"]], dtype=np.int64),
+        texcoords=np.asarray(uvs, dtype=np.float64).reshape(-1, 2) if mapped else None,
+        face_texcoords=np.asarray(tri_uv, dtype=np.int64).reshape(-1, 3) if mapped else None,
+    )
+
+
+def _parse_obj(text: str, path: Path) -> dict:
+    """The vertex (``verts``), texture-coordinate (``uvs``), triangle (``tris``, with
+    their ``tri_uv`` and ``tri_mtl``) and ``libs`` lists of an OBJ file's text."""
+    out: dict = {"verts": [], "uvs": [], "tris": [], "tri_uv": [], "tri_mtl": [], "libs": []}
+    verts, uvs = out["verts"], out["uvs"]
     material: str | None = None
     for lineno, raw in enumerate(text.splitlines(), 1):
         key, rest = ([*raw.split(None, 1), "", ""])[:2]
@@ -136,43 +186,56 @@ def read_obj(path: Path, textures: dict[Path, np.ndarray | None] | None = None) 
                 if len(xyz) != 3 or not np.all(np.isfinite(xyz)):
                     raise ValueError("a vertex needs 3 finite coordinates")
                 verts.append(xyz)
+            elif key == "vt":
+                uvs.append([float(x) for x in [*rest.split(), "0", "0"][:2]])
             elif key == "f":
-                idx = []
+                idx, uv = [], []
                 for entry in rest.split():
-                    i = int(entry.split("/")[0])
+                    fields = entry.split("/")
+                    i = int(fields[0])
                     i = i - 1 if i > 0 else len(verts) + i if i < 0 else -1
                     if not 0 <= i < len(verts):
                         raise ValueError(f"face index {entry!r} is not one of 1..{len(verts)}")
                     idx.append(i)
+                    t = int(fields[1]) if len(fields) > 1 and fields[1] else 0
+                    uv.append(t - 1 if t > 0 else len(uvs) + t if t < 0 else -1)
                 if len(idx) < 3:
                     raise ValueError("a face needs at least 3 vertices")
-                tris.extend((idx[0], idx[k], idx[k + 1]) for k in range(1, len(idx) - 1))
-                tri_mtl.extend([material] * (len(idx) - 2))
+                fan = range(1, len(idx) - 1)
+                out["tris"].extend((idx[0], idx[k], idx[k + 1]) for k in fan)
+                out["tri_uv"].extend((uv[0], uv[k], uv[k + 1]) for k in fan)
+                out["tri_mtl"].extend([material] * len(fan))
             elif key == "usemtl":
                 material = rest.strip() or None
             elif key == "mtllib":
-                libs.append(rest.strip())
+                out["libs"].append(rest.strip())
         except ValueError as exc:
             raise ConfigError(f"malformed OBJ file {path}, line {lineno}: {exc}") from None
     if not verts:
         raise ConfigError(f"OBJ file {path} has no vertex (expected 'v x y z' lines)")
-    counts = Counter(tri_mtl)  # insertion-ordered: a tie goes to the first material used
-    name = max(counts, key=counts.__getitem__) if counts else None
-    return ObjMesh(
-        vertices=np.asarray(verts, dtype=np.float64),
-        faces=np.asarray(tris, dtype=np.int64).reshape(-1, 3),
-        rgba=(
-            DEFAULT_RGBA
-            if name is None
-            else _material_rgba(path.parent, libs, name, {} if textures is None else textures)
-        ),
-    )
+    return out
 
 
-def _material_rgba(
-    folder: Path, libs: list[str], name: str, textures: dict[Path, np.ndarray | None]
-) -> tuple[float, float, float, float]:
-    """Colour [rgba 0..1] of material ``name`` from the first MTL library defining it."""
+def _texture_of(
+    folder: Path, props: dict[str, str]
+) -> tuple[Path | None, tuple[float, float, float, float]]:
+    """A material's ``map_Kd`` image (None if absent) and its ``Kd`` and alpha."""
+    words = props.get("map_Kd", "").split()
+    image = folder / words[-1] if words else None
+    try:
+        kd = [float(x) for x in props.get("Kd", "1 1 1").split()[:3]]
+        alpha = float(props["d"]) if "d" in props else 1.0 - float(props.get("Tr", 0.0))
+    except ValueError:
+        kd, alpha = [1.0, 1.0, 1.0], 1.0
+    r, g, b = (float(c) for c in np.clip(np.resize(kd, 3), 0.0, 1.0))
+    tint = (r, g, b, float(np.clip(alpha, 0.0, 1.0)))
+    return (image.resolve() if image is not None and image.is_file() else None), tint
+
+
+def _material(folder: Path, libs: list[str], name: str) -> tuple[Path, dict[str, str]] | None:
+    """The folder of the first MTL library defining material ``name`` (its texture
+    paths are relative to it) and the material's properties (``Kd``, ``map_Kd``, ``d``
+    ...), or None."""
     files = [folder / lib for lib in libs] + [folder / w for lib in libs for w in lib.split()]
     for mtl in dict.fromkeys(f for f in files if f.is_file()):  # a name may hold spaces
         try:
@@ -189,8 +252,8 @@ def _material_rgba(
             elif props is not None and key:
                 props[key] = value.strip()
         if props is not None:
-            return _props_rgba(mtl.parent, props, textures)
-    return DEFAULT_RGBA
+            return mtl.parent, props
+    return None
 
 
 def _props_rgba(
@@ -304,6 +367,33 @@ def _classify(vertices: np.ndarray, faces: np.ndarray) -> str:
     if np.ptp(local, axis=0).min() < BOARD_THICKNESS:
         return "flat"
     return "convex" if concavity(vertices, faces) <= CONCAVITY_LIMIT else "concave"
+
+
+def png_texture(image: Path, cache_dir: Path | None = None) -> Path | None:
+    """``image`` as a PNG file MuJoCo reads: itself if it is one, else a PNG copy in
+    ``cache_dir`` (default :func:`default_cache_dir`), keyed by the image's bytes; None
+    if it cannot be read (PartNet's textures are mostly JPEG, which MuJoCo does not
+    read)."""
+    image = Path(image)
+    if image.suffix.lower() == ".png":
+        return image
+    try:
+        data = image.read_bytes()
+    except OSError:
+        return None
+    out = (
+        (cache_dir or default_cache_dir()) / "textures" / f"{hashlib.sha256(data).hexdigest()}.png"
+    )
+    if not out.is_file():
+        pixels = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_COLOR)
+        if pixels is None:
+            return None
+        out.parent.mkdir(parents=True, exist_ok=True)
+        tmp = out.with_name(f"{out.stem}.{os.getpid()}.tmp.png")
+        if not cv2.imwrite(str(tmp), pixels):
+            return None
+        os.replace(tmp, out)
+    return out
 
 
 def default_cache_dir() -> Path:

@@ -112,6 +112,7 @@ def build_bodies(
     """
     hinge_scale = 180.0 / math.pi if spec.compiler.degree else 1.0
     meshes: dict[tuple, str] = {}
+    materials: dict[tuple, str] = {}
     existing = {m.name for m in spec.meshes}
     # Base group: the root and every link welded to it by fixed joints.
     base_group = {urdf.root}
@@ -134,9 +135,23 @@ def build_bodies(
                 m = spec.add_mesh(name=name, uservert=g.vertices.ravel().tolist())
                 if g.faces is not None:
                     m.userface = g.faces.ravel().tolist()
+                if g.texture is not None:
+                    m.usertexcoord = g.texcoords.ravel().tolist()  # type: ignore[union-attr]
+                    m.userfacetexcoord = g.face_texcoords.ravel().tolist()  # type: ignore[union-attr]
             m.inertia = mujoco.mjtMeshInertia.mjMESH_INERTIA_SHELL
             meshes[key] = name
         return meshes[key]
+
+    def material_name(g: GeometryInfo) -> str:
+        """A material wearing ``g.texture`` (one per image and tint)."""
+        key = (str(g.texture), g.rgba)
+        if key not in materials:
+            name = f"{prefix}material_{len(materials)}"
+            spec.add_texture(name=name, type=mujoco.mjtTexture.mjTEXTURE_2D, file=str(g.texture))
+            mat = spec.add_material(name=name, rgba=list(g.rgba or (1.0, 1.0, 1.0, 1.0)))
+            mat.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = name
+            materials[key] = name
+        return materials[key]
 
     def add_geoms(body: mujoco.MjsBody, link: LinkInfo) -> None:
         in_base = link.name in base_group
@@ -184,6 +199,8 @@ def build_bodies(
                     geom.group, geom.contype, geom.conaffinity = 1, 0, 0
                     geom.density = 0.0
                     geom.rgba = rgba if rgba is not None else (0.7, 0.7, 0.7, 1.0)
+                    if g.texture is not None:
+                        geom.material = material_name(g)
 
     def weighs(name: str) -> bool:
         """Whether a link, or a link welded under it by fixed joints, has mass."""

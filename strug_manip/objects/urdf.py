@@ -50,6 +50,8 @@ class GeometryInfo:
             the geom frame, scale applied, shape (n, 3) [m]; ``None`` for files.
         faces: its triangles, shape (m, 3) int, or ``None`` (a convex piece: MuJoCo
             takes the hull of the vertices).
+        texture: a PNG image the mesh wears (visual meshes), or ``None``; then
+            ``texcoords`` (k, 2) and ``face_texcoords`` (m, 3) int map it.
     """
 
     name: str
@@ -61,6 +63,9 @@ class GeometryInfo:
     rgba: tuple[float, float, float, float] | None
     vertices: np.ndarray | None = field(default=None, repr=False, compare=False)
     faces: np.ndarray | None = field(default=None, repr=False, compare=False)
+    texture: Path | None = None
+    texcoords: np.ndarray | None = field(default=None, repr=False, compare=False)
+    face_texcoords: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     def key(self) -> tuple:
         """Identity of the geometry (shape, size, file, pose), to merge visual+collision."""
