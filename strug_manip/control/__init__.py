@@ -2,7 +2,7 @@
 
 - :mod:`.skills`: ``OpenDrawer``, ``OpenDoor``, ``Push``, ``PullV``, ``PullH``,
   ``Pick``, ``Place`` (each a frozen dataclass of its parameters; ``run`` on the full
-  robot, ``simulate`` on a :class:`~strug_manip.control.twin.PlanningTwin`);
+  robot, ``simulate`` on a :class:`~strug_manip.control.twin_body.PlanningTwin`);
 - :mod:`.outcome`: the facts a skill reports (:class:`Outcome`, :class:`Status`);
 - :mod:`.params`: the skills' constants (:class:`SkillParams`);
 - :mod:`.grasps`, :mod:`.targets`: grasp poses of handles, where the object goes;
@@ -15,7 +15,7 @@
 """
 
 from strug_manip.control.context import ControlContext
-from strug_manip.control.execution import FullRobot
+from strug_manip.control.fetch_body import FullRobot
 from strug_manip.control.grasps import flip_fingers, handle_grasps, held_grasp
 from strug_manip.control.outcome import STATUSES, Outcome, Status
 from strug_manip.control.params import DEFAULT_PARAMS, SkillParams
@@ -32,7 +32,7 @@ from strug_manip.control.skills import (
     part_at,
 )
 from strug_manip.control.targets import PlaceTarget, place_target, place_targets
-from strug_manip.control.twin import PlanningTwin, run_batch
+from strug_manip.control.twin_body import PlanningTwin, run_batch
 
 __all__ = [
     "DEFAULT_PARAMS",
