@@ -6,11 +6,16 @@
 - :mod:`.outcome`: the facts a skill reports (:class:`Outcome`, :class:`Status`);
 - :mod:`.params`: the skills' constants (:class:`SkillParams`);
 - :mod:`.grasps`, :mod:`.targets`: grasp poses of handles, where the object goes;
-- :mod:`.plan`, :mod:`.placement`, :mod:`.execution`, :mod:`.twin`: a skill as gripper
-  motions, where the base stands, the full robot, the planning twin;
-- :mod:`.ik`, :mod:`.motion`, :mod:`.contacts`, :mod:`.navigation`, :mod:`.driver`,
-  :mod:`.timing`: inverse kinematics (mink), arm motion planning (OMPL), the robot's
-  contacts, base routes, the joint driver, the one timing law;
+- :mod:`.plan`, :mod:`.placement`: a skill as gripper motions, where the base stands;
+- :mod:`.executor`: the executor core both bodies share (the stop rules, the stow, the
+  outcome) and their interface (:class:`~.executor.Body`);
+- :mod:`.fetch_body`: the full robot (:class:`FullRobot`); :mod:`.twin_body`,
+  :mod:`.twin_program`, :mod:`.twin_rollout`, :mod:`.twin_servo`, :mod:`.rotations`:
+  the planning twin (:class:`PlanningTwin`, its programs, rollouts, servo model);
+- :mod:`.ik` (its limits :mod:`.ik_limits`, its QP :mod:`.ik_qp`), :mod:`.motion`,
+  :mod:`.contacts`, :mod:`.navigation`, :mod:`.driver`, :mod:`.timing`: inverse
+  kinematics (mink), arm motion planning (OMPL), the robot's contacts, base routes, the
+  joint driver, the one timing law;
 - :mod:`.context`: the solvers and caches skills share (:class:`ControlContext`).
 """
 

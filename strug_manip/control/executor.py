@@ -72,21 +72,23 @@ class Body(Protocol):
 # -- the stop rules --------------------------------------------------------------------
 # Each takes scalars (the full robot, at every control tick) or arrays (the twin, over
 # a rollout's states) alike.
+Values = float | np.ndarray
+Flags = bool | np.ndarray
 
 
-def grasp_lost(holding, fingers):
+def grasp_lost(holding: Flags, fingers: Values) -> Flags:
     """Stop rule ``grasp_lost``: where the fingers should hold something (``holding``)
     and their opening ``fingers`` [m] says they closed on nothing."""
     return holding & (fingers < FINGERS_EMPTY)
 
 
-def cabinet_slid(slid, params: SkillParams):
+def cabinet_slid(slid: Values, params: SkillParams) -> Flags:
     """Stop rule ``cabinet_moved``: the cabinet base has slid ``slid`` [m] (since the
     skill started, or a recovery) more than ``cabinet_motion_limit``."""
     return slid > params.cabinet_motion_limit
 
 
-def held_back(lag, tol):
+def held_back(lag: Values, tol: Values) -> Flags:
     """Stop rule ``collision``: the gripper is ``lag`` [m] behind its commanded pose,
     more than the tracking tolerance ``tol`` [m] (the arm or hand is blocked)."""
     return lag > tol

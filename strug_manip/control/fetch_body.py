@@ -361,7 +361,7 @@ class FullRobot:
 
     # -- motions -------------------------------------------------------------------------
     def _near(self, posture: Sequence[float]) -> bool:
-        """The arm (torso aside) is within :data:`TUCKED_TOLERANCE` of ``posture``."""
+        """The arm (torso aside) is within :data:`~.executor.TUCKED_TOLERANCE` of ``posture``."""
         return near_posture(self.drv.q, np.array(posture))
 
     def _tucked(self) -> bool:

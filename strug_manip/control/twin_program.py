@@ -74,7 +74,7 @@ class Program:
             the monitors compare the hand with ``pos``, as the full robot's compare
             it with its command.
         free: the first step after the last release (the hand moves freely from
-            there; :data:`FREE_COARSENING`), ``nstep`` when the skill ends holding.
+            there; :data:`~.twin_rollout.FREE_COARSENING`), ``nstep`` when the skill ends holding.
     """
 
     plan: SkillPlan

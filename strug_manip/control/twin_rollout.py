@@ -11,6 +11,7 @@ import numpy as np
 from mujoco import rollout
 
 import strug_manip.control.timing as timing
+from strug_manip.control.driver import MONITOR_PERIOD
 from strug_manip.control.executor import (
     cabinet_slid,
     grasp_lost,
@@ -252,8 +253,9 @@ class TwinRollout:
         return np.linalg.norm(states[:, a : a + 2] - xy0, axis=1)
 
     def _check_every(self) -> int:
-        """Steps between the monitors' checks: every 10 ms, as on the full robot."""
-        return max(1, round(0.01 / self.world.model.opt.timestep))
+        """Steps between the monitors' checks: every
+        :data:`~.driver.MONITOR_PERIOD` (10 ms), as on the full robot."""
+        return max(1, round(MONITOR_PERIOD / self.world.model.opt.timestep))
 
     def coast(self, start: np.ndarray, last: np.ndarray, budget: int) -> np.ndarray:
         """The scene from rollout state ``start`` with the hand out of it and the arm
