@@ -211,7 +211,8 @@ def test_the_reduced_qp_step_is_minks(include_base, posture, line, pairs):
     (bounds active) and far from the target (the LM term large)."""
     import mink
 
-    from strug_manip.control.ik import LIMIT_MARGIN, TORSO_COST
+    from strug_manip.control.ik_limits import LIMIT_MARGIN
+    from strug_manip.control.ik_qp import TORSO_COST
 
     m = mujoco.MjModel.from_xml_path(str(FETCH_XML))
     grip = body_geoms(m, ["gripper_link", "r_gripper_finger_link", "l_gripper_finger_link"])

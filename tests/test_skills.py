@@ -56,8 +56,8 @@ from strug_manip.control import (
     place_target,
     run_batch,
 )
-from strug_manip.control import twin as twin_mod
-from strug_manip.control.execution import TUCKED_TOLERANCE
+from strug_manip.control import twin_rollout as twin_mod
+from strug_manip.control.executor import TUCKED_TOLERANCE
 from strug_manip.control.outcome import SkillStop
 from strug_manip.control.placement import WHOLE_BODY_LINES
 from strug_manip.domains.manipulation.rules import dragged, inside, open_enough
@@ -700,10 +700,10 @@ def test_the_twins_arm_never_enters_a_part_and_its_recovery_stops_a_sliding_cabi
     twin = PlanningTwin(world.scene.cabinet_spec, world.config, ControlContext())
     twin.reset()
     m, d = twin.world.model, twin.world.data
-    start = np.empty(mujoco.mj_stateSize(m, twin_mod._ROLLOUT_STATE))
-    mujoco.mj_getState(m, d, start, twin_mod._ROLLOUT_STATE)
-    row = np.empty(mujoco.mj_stateSize(m, twin_mod._CONTROL))
-    mujoco.mj_getState(m, d, row, twin_mod._CONTROL)
+    start = np.empty(mujoco.mj_stateSize(m, twin_mod.ROLLOUT_STATE))
+    mujoco.mj_getState(m, d, start, twin_mod.ROLLOUT_STATE)
+    row = np.empty(mujoco.mj_stateSize(m, twin_mod.CONTROL))
+    mujoco.mj_getState(m, d, row, twin_mod.CONTROL)
     assert not twin._arm_starts_inside(start, row)  # parked: above everything
     T = world.scene.T_world_cabinet
     handle = world.scene.cabinet_spec.part("link_5").handle_at(0.0, T)
@@ -712,7 +712,7 @@ def test_the_twins_arm_never_enters_a_part_and_its_recovery_stops_a_sliding_cabi
     mpos[twin._arm_mocap] = handle - np.array([0.03, 0.0, 0.0])  # through the door panel
     assert twin._arm_starts_inside(start, inside)
     after = np.empty_like(start)
-    mujoco.mj_getState(m, d, after, twin_mod._ROLLOUT_STATE)
+    mujoco.mj_getState(m, d, after, twin_mod.ROLLOUT_STATE)
     assert np.array_equal(after, start)  # the check leaves the twin as it was
 
     n, limit = 200, twin.params.cabinet_motion_limit

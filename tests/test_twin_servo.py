@@ -10,7 +10,7 @@ import pytest
 
 from strug_manip.control import ControlContext
 from strug_manip.control.base_servo import BaseServo, base_inertia
-from strug_manip.control.twin import arm_servo
+from strug_manip.control.twin_servo import arm_servo
 from strug_manip.robot.fetch import ACTUATORS, ARM_TORSO_JOINTS, BASE_JOINTS, GRIPPER_SITE
 from strug_manip.world import ManipulationWorld, SceneConfig
 from strug_manip.world.floating_gripper import SERVOS, SLIDES

@@ -82,7 +82,7 @@ from strug_manip.control import (
     place_targets,
 )
 from strug_manip.control.params import DEFAULT_PARAMS
-from strug_manip.control.twin import TIMESTEP as TWIN_STEP
+from strug_manip.control.twin_body import TIMESTEP as TWIN_STEP
 from strug_manip.domains.manipulation.rules import dragged, inside, open_enough
 from strug_manip.experiments.seeds import seed_range
 from strug_manip.objects.hypotheses import BelievedJoint, believed_spec, cell_joints, model_of

@@ -2,20 +2,25 @@
 
 - :mod:`.skills`: ``OpenDrawer``, ``OpenDoor``, ``Push``, ``PullV``, ``PullH``,
   ``Pick``, ``Place`` (each a frozen dataclass of its parameters; ``run`` on the full
-  robot, ``simulate`` on a :class:`~strug_manip.control.twin.PlanningTwin`);
+  robot, ``simulate`` on a :class:`~strug_manip.control.twin_body.PlanningTwin`);
 - :mod:`.outcome`: the facts a skill reports (:class:`Outcome`, :class:`Status`);
 - :mod:`.params`: the skills' constants (:class:`SkillParams`);
 - :mod:`.grasps`, :mod:`.targets`: grasp poses of handles, where the object goes;
-- :mod:`.plan`, :mod:`.placement`, :mod:`.execution`, :mod:`.twin`: a skill as gripper
-  motions, where the base stands, the full robot, the planning twin;
-- :mod:`.ik`, :mod:`.motion`, :mod:`.contacts`, :mod:`.navigation`, :mod:`.driver`,
-  :mod:`.timing`: inverse kinematics (mink), arm motion planning (OMPL), the robot's
-  contacts, base routes, the joint driver, the one timing law;
+- :mod:`.plan`, :mod:`.placement`: a skill as gripper motions, where the base stands;
+- :mod:`.executor`: the executor core both bodies share (the stop rules, the stow, the
+  outcome) and their interface (:class:`~.executor.Body`);
+- :mod:`.fetch_body`: the full robot (:class:`FullRobot`); :mod:`.twin_body`,
+  :mod:`.twin_program`, :mod:`.twin_rollout`, :mod:`.twin_servo`, :mod:`.rotations`:
+  the planning twin (:class:`PlanningTwin`, its programs, rollouts, servo model);
+- :mod:`.ik` (its limits :mod:`.ik_limits`, its QP :mod:`.ik_qp`), :mod:`.motion`,
+  :mod:`.contacts`, :mod:`.navigation`, :mod:`.driver`, :mod:`.timing`: inverse
+  kinematics (mink), arm motion planning (OMPL), the robot's contacts, base routes, the
+  joint driver, the one timing law;
 - :mod:`.context`: the solvers and caches skills share (:class:`ControlContext`).
 """
 
 from strug_manip.control.context import ControlContext
-from strug_manip.control.execution import FullRobot
+from strug_manip.control.fetch_body import FullRobot
 from strug_manip.control.grasps import flip_fingers, handle_grasps, held_grasp
 from strug_manip.control.outcome import STATUSES, Outcome, Status
 from strug_manip.control.params import DEFAULT_PARAMS, SkillParams
@@ -32,7 +37,7 @@ from strug_manip.control.skills import (
     part_at,
 )
 from strug_manip.control.targets import PlaceTarget, place_target, place_targets
-from strug_manip.control.twin import PlanningTwin, run_batch
+from strug_manip.control.twin_body import PlanningTwin, run_batch
 
 __all__ = [
     "DEFAULT_PARAMS",

@@ -12,7 +12,7 @@ quadratic program (solver ``daqp``) with
 * a :class:`mink.ConfigurationLimit` (joint limits) and, optionally, a
   :class:`mink.CollisionAvoidanceLimit` between the given geom groups,
 * the joints that do not take part (base unless ``include_base``, head, fingers) held
-  still: the QP is mink's with their equality rows eliminated (:class:`_ReducedQP`);
+  still: the QP is mink's with their equality rows eliminated (:class:`~.ik_qp.ReducedQP`);
 * with ``include_base``, a :class:`mink.DampingTask` that makes base motion
   ``base_cost`` times dearer than arm motion, so the base moves only where the arm
   alone cannot follow.
@@ -40,7 +40,6 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-import daqp
 import mink
 import mujoco
 import numpy as np
@@ -51,6 +50,14 @@ from planners.errors import (
     check_positive_float,
     check_positive_int,
 )
+from strug_manip.control.ik_limits import (
+    LIMIT_MARGIN,
+    check_joint_values,
+    clip_into_limits,
+    joint_ranges,
+    limit_bounds,
+)
+from strug_manip.control.ik_qp import ReducedQP, damping_costs
 from strug_manip.objects.hypotheses import check_pose
 from strug_manip.robot.fetch import (
     ALL_JOINTS,
@@ -79,11 +86,6 @@ READY_POSTURE: dict[str, float] = {
 COLLISION_DETECTION = 0.15
 #: Tolerance of the collision check of a solution, below ``collision_margin`` [m].
 COLLISION_TOL = 1e-3
-#: Distance the solutions keep from the joint limits [rad or m]: a servo commanded onto
-#: a limit overshoots it under load.
-LIMIT_MARGIN = 0.01
-#: Relative cost of torso motion along a tracked line [-] (the torso is slow).
-TORSO_COST = 100.0
 #: Largest joint step between two consecutive poses of a tracked line [rad or m]: a
 #: bigger one is a jump to another IK branch, not a continuous motion.
 TRACK_MAX_STEP = 0.35
@@ -166,118 +168,6 @@ def _rotation_angle(R: np.ndarray) -> float:
     mujoco.mju_mat2Quat(quat, np.ascontiguousarray(R, dtype=float).reshape(9))
     v = quat[1:]
     return 2.0 * math.atan2(math.sqrt(v.dot(v)), abs(float(quat[0])))  # = np.linalg.norm
-
-
-def _limit_bounds(model: mujoco.MjModel) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The qpos addresses (k,) of ``model``'s limited hinge and slide joints and the
-    bounds (k,), (k,) [rad or m] :data:`LIMIT_MARGIN` inside their ranges (at most a
-    quarter of a range): what :meth:`FetchIK._clip_into_limits` clips to, once."""
-    adr, lows, highs = [], [], []
-    kinds = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
-    for jid in range(model.njnt):
-        if model.jnt_limited[jid] and int(model.jnt_type[jid]) in kinds:
-            lo, hi = model.jnt_range[jid]
-            margin = min(LIMIT_MARGIN, 0.25 * (hi - lo))
-            adr.append(int(model.jnt_qposadr[jid]))
-            lows.append(lo + margin)
-            highs.append(hi - margin)
-    return np.array(adr, dtype=int), np.array(lows), np.array(highs)
-
-
-#: What DAQP takes for an absent bound (qpsolvers' convention).
-_NO_BOUND = 1e30
-
-
-class _ReducedQP:
-    """The differential-IK quadratic program of :func:`mink.solve_ik`, over the moving
-    dofs only.
-
-    mink builds it over all ``nv`` dofs and holds the others still with equality rows
-    (:class:`mink.DofFreezingTask`); with those rows eliminated the QP is the same
-    problem with ``k`` variables and its joint limits simple bounds, which DAQP (the
-    solver mink calls through qpsolvers) takes as such. The frame task's residual is
-    mink's own; the posture and damping terms are diagonal and added as such. The
-    step equals mink's to rounding (``tests/test_ik.py``) at a fraction of its cost:
-    the generic assembly and qpsolvers' checks were most of a placement search's time.
-
-    Args:
-        model: the IK's model; joints: the moving joints (hinge or slide), k of them.
-        limit: the model's :class:`mink.ConfigurationLimit` (bounds and gain).
-        posture_cost: the posture task's cost per dof [-].
-    """
-
-    def __init__(
-        self,
-        model: mujoco.MjModel,
-        joints: Sequence[str],
-        limit: mink.ConfigurationLimit,
-        posture_cost: float,
-    ) -> None:
-        ids = [model.joint(j).id for j in joints]
-        self.dofs = np.array([int(model.jnt_dofadr[i]) for i in ids])
-        self.qadr = np.array([int(model.jnt_qposadr[i]) for i in ids])
-        limited = np.isin(self.dofs, limit.indices)
-        self._limited = limited
-        self._lower = np.where(limited, limit.lower[self.qadr], 0.0)
-        self._upper = np.where(limited, limit.upper[self.qadr], 0.0)
-        self._gain = float(limit.gain)
-        self._posture = posture_cost**2
-        self._sense = np.zeros(len(ids), dtype=np.intc)
-        self._no_rows = np.zeros((0, len(ids)))
-        self.nv = model.nv
-
-    def velocity(
-        self,
-        config: mink.Configuration,
-        frame: mink.FrameTask,
-        diag: np.ndarray,
-        damping: float,
-        posture: np.ndarray | None = None,
-        limits: Sequence[mink.Limit] = (),
-    ) -> np.ndarray | None:
-        """The step (nv,) of ``mink.solve_ik(config, [frame, posture task, damping
-        task], 1.0, "daqp", damping, [configuration limit, *limits], freezing)``.
-
-        Args:
-            config: the configuration (its kinematics up to date).
-            frame: the gripper's frame task (target set).
-            diag: the damping tasks' squared costs per moving dof, (k,) [-].
-            damping: the Levenberg-Marquardt damping on every dof [-].
-            posture: the posture target (nq,), or None without the posture task.
-            limits: further limits (collision avoidance), their rows restricted to
-                the moving dofs.
-
-        Returns:
-            The step per dof (frozen dofs 0) [rad or m], or None where DAQP finds no
-            solution (mink raises :class:`mink.NoSolutionFound`).
-        """
-        W, e, mu = frame.compute_qp_residual(config)
-        Wa = W[:, self.dofs]
-        H = Wa.T @ Wa
-        c = -(e @ Wa)
-        d = diag + (damping + mu)
-        q = config.q[self.qadr]
-        if posture is not None:
-            d = d + self._posture
-            c += self._posture * (q - posture[self.qadr])
-        H.flat[:: len(d) + 1] += d
-        upper = np.where(self._limited, self._gain * (self._upper - q), _NO_BOUND)
-        lower = np.where(self._limited, self._gain * (self._lower - q), -_NO_BOUND)
-        A, sense = self._no_rows, self._sense
-        rows = [lim.compute_qp_inequalities(config, 1.0) for lim in limits]
-        rows = [con for con in rows if not con.inactive]
-        if rows:
-            A = np.vstack([con.G[:, self.dofs] for con in rows])
-            h = np.concatenate([con.h for con in rows])
-            upper = np.concatenate([upper, h])
-            lower = np.concatenate([lower, np.full(len(h), -_NO_BOUND)])
-            sense = np.zeros(len(upper), dtype=np.intc)
-        x, _, flag, _ = daqp.solve(H, c, A, upper, lower, sense)
-        if flag <= 0:
-            return None
-        v = np.zeros(self.nv)
-        v[self.dofs] = x
-        return v
 
 
 class FetchIK:
@@ -365,13 +255,7 @@ class FetchIK:
         if any(model.jnt_type[j] == mujoco.mjtJoint.mjJNT_BALL for j in range(model.njnt)):
             raise ConfigError("the IK model must not have ball joints")
         # Bounds of the active joints (unlimited: +-inf), for restarts and clipping.
-        lo, hi = [], []
-        for j in self.active_joints:
-            jid = model.joint(j).id
-            limited = bool(model.jnt_limited[jid])
-            lo.append(float(model.jnt_range[jid, 0]) if limited else -math.inf)
-            hi.append(float(model.jnt_range[jid, 1]) if limited else math.inf)
-        self._lo, self._hi = np.array(lo), np.array(hi)
+        self._lo, self._hi = joint_ranges(model, self.active_joints)
 
         # Default configuration: the home keyframe if the model has one, else qpos0.
         key = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_KEY, HOME_KEYFRAME)
@@ -381,8 +265,8 @@ class FetchIK:
             self.posture = self._check_q("posture", posture)
         for j, v in self.posture.items():
             self._q_default[self._qadr[j]] = v
-        self._clip = _limit_bounds(model)
-        self._clip_into_limits(self._q_default)
+        self._clip = limit_bounds(model)
+        clip_into_limits(self._q_default, self._clip)
 
         self._config = mink.Configuration(model, self._q_default)
         self._frame = mink.FrameTask(
@@ -410,46 +294,18 @@ class FetchIK:
                 raise ConfigError(f"bad collision_pairs {collision_pairs!r}: {exc}") from None
             self._limits.append(limit)
             self._geom_pairs = [(int(a), int(b)) for a, b in limit.geom_id_pairs]
-        self._qp = _ReducedQP(model, self.active_joints, self._limits[0], posture_cost)
-        # Diagonal costs of the moving dofs [-] (mink.DampingTask's, squared). Solves:
-        # with ``include_base``, base motion ``base_cost`` times dearer than the arm's.
-        dof = {j: k for k, j in enumerate(self.active_joints)}
-        self._solve_diag = np.zeros(len(self.active_joints))
-        if include_base:
-            base_cost = check_positive_float("base_cost", base_cost)
-            self._solve_diag[:] = 1e-3**2
-            for j in BASE_JOINTS:
-                self._solve_diag[dof[j]] = (1e-3 * base_cost) ** 2
-        # Lines leave the torso alone where the arm can follow (it is 10x slower than
-        # the arm joints: 0.1 m/s), as the base where the arm alone can.
-        self._line_diag = np.full(len(self.active_joints), 1e-3**2)
-        self._line_diag[dof[TORSO_JOINT]] = (1e-3 * TORSO_COST) ** 2
-        if include_base:
-            for j in BASE_JOINTS:
-                self._line_diag[dof[j]] = (1e-3 * base_cost) ** 2
+        self._qp = ReducedQP(model, self.active_joints, self._limits[0], posture_cost)
+        # Diagonal costs of the moving dofs [-] (mink.DampingTask's, squared), in solves
+        # and along tracked lines.
+        self._solve_diag, self._line_diag = damping_costs(
+            self.active_joints, include_base, base_cost
+        )
 
     # -- helpers -------------------------------------------------------------------------
 
     def _check_q(self, what: str, q: Mapping[str, float]) -> dict[str, float]:
         """``q`` as ``{joint: float}``, names and values checked."""
-        if not isinstance(q, Mapping):
-            raise ConfigError(f"{what} must map joint names to values [m or rad], got {q!r}")
-        out = {}
-        for name, value in q.items():
-            if name not in self._qadr:
-                raise UnknownNameError(f"joint of the IK model ({what})", name, list(self._qadr))
-            if isinstance(value, bool) or not isinstance(value, int | float | np.number):
-                raise ConfigError(f"{what}[{name!r}] must be a number [m or rad], got {value!r}")
-            if not math.isfinite(float(value)):
-                raise ConfigError(f"{what}[{name!r}] must be finite, got {value!r}")
-            out[name] = float(value)
-        return out
-
-    def _clip_into_limits(self, q: np.ndarray) -> None:
-        """Clip every limited hinge/slide joint of qpos ``q`` (nq,) into its range, at
-        least :data:`LIMIT_MARGIN` inside it (where the limit constraint is satisfied)."""
-        adr, lows, highs = self._clip
-        q[adr] = np.minimum(np.maximum(q[adr], lows), highs)
+        return check_joint_values(what, q, self._qadr)
 
     def _errors(self, p_goal: np.ndarray, R_goal: np.ndarray) -> tuple[float, float]:
         """(position error [m], rotation error [rad]) of the gripper at the current q."""
@@ -567,7 +423,7 @@ class FetchIK:
         if q_init is not None:
             for j, v in self._check_q("q_init", q_init).items():
                 q0[self._qadr[j]] = v
-        self._clip_into_limits(q0)
+        clip_into_limits(q0, self._clip)
 
         p_goal, R_goal = T[:3, 3].copy(), T[:3, :3].copy()
         self._frame.set_target(mink.SE3.from_matrix(T))
@@ -670,7 +526,7 @@ class FetchIK:
         q = self._q_default.copy()
         for j, v in self._check_q("q_init", q_init).items():
             q[self._qadr[j]] = v
-        self._clip_into_limits(q)
+        clip_into_limits(q, self._clip)
         config = self._config
         config.update(q)
         out: list[np.ndarray] = []

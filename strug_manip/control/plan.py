@@ -7,9 +7,9 @@ nothing about the body that executes it:
 - ``phases``: what follows, in order: :class:`Line` (the gripper follows a dense
   Cartesian path, possibly in contact) and :class:`Grip` (close or open the fingers).
 
-The full robot (:class:`~strug_manip.control.execution.FullRobot`) finds where its base
+The full robot (:class:`~strug_manip.control.fetch_body.FullRobot`) finds where its base
 stands, solves the IK of every pose, plans the free motion with OMPL and drives there;
-the planning twin (:class:`~strug_manip.control.twin.PlanningTwin`) places a floating
+the planning twin (:class:`~strug_manip.control.twin_body.PlanningTwin`) places a floating
 gripper at ``pre`` and runs the phases. Both time the lines with the same law
 (:mod:`.timing`) and report the same :class:`~strug_manip.control.outcome.Outcome`.
 """

@@ -3,9 +3,9 @@
 Each skill is a frozen dataclass of its parameters. :meth:`Skill.plan` turns them into
 a :class:`~strug_manip.control.plan.SkillPlan` (gripper poses and grip commands, world
 frame) against the world the robot *believes* in (the planning world); :meth:`Skill.run`
-executes that plan on the full robot (:class:`~strug_manip.control.execution.FullRobot`)
+executes that plan on the full robot (:class:`~strug_manip.control.fetch_body.FullRobot`)
 and :meth:`Skill.simulate` on the planning twin
-(:class:`~strug_manip.control.twin.PlanningTwin`). Both return the same
+(:class:`~strug_manip.control.twin_body.PlanningTwin`). Both return the same
 :class:`~strug_manip.control.outcome.Outcome`: facts, not a verdict.
 
 =================  ==========================================================================
@@ -53,7 +53,8 @@ import numpy as np
 
 from planners.errors import ConfigError, UnknownNameError
 from strug_manip.control.context import ControlContext
-from strug_manip.control.execution import FullRobot, Observer
+from strug_manip.control.executor import Body
+from strug_manip.control.fetch_body import FullRobot, Observer
 from strug_manip.control.outcome import Outcome
 from strug_manip.control.params import DEFAULT_PARAMS, SkillParams
 from strug_manip.control.plan import (
@@ -65,7 +66,7 @@ from strug_manip.control.plan import (
     retreat_poses,
     straight,
 )
-from strug_manip.control.twin import PlanningTwin
+from strug_manip.control.twin_body import BoundTwin, PlanningTwin
 from strug_manip.objects.hypotheses import BelievedJoint, check_pose
 from strug_manip.world.scene import OBJECT_HALF_SIZE
 from strug_manip.world.sim import ManipulationWorld
@@ -117,11 +118,7 @@ class Skill:
         """
         # The robot first: it checks the worlds and the seed before anything is planned.
         robot = FullRobot(world, ctx, params, plan_world=plan_world, seed=seed, observer=observer)
-        self.check_hand(world)
-        pw = robot.plan_world
-        if pw is not world:
-            pw.copy_robot_state(world)
-        return robot.run(self.plan(pw, params))
+        return self._execute(robot, params)
 
     def simulate(
         self,
@@ -129,16 +126,20 @@ class Skill:
         params: SkillParams = DEFAULT_PARAMS,
         plan_world: ManipulationWorld | None = None,
     ) -> Outcome:
-        """Execute on a planning twin (:class:`~strug_manip.control.twin.PlanningTwin`):
+        """Execute on a planning twin (:class:`~strug_manip.control.twin_body.PlanningTwin`):
         physics in the twin's cabinet, the plan made against ``plan_world`` (the world
         the robot believes in, as for :meth:`run`; default: the twin's own cabinet)."""
         if not isinstance(twin, PlanningTwin):
             raise ConfigError(f"twin must be a PlanningTwin, got {twin!r}")
         if plan_world is not None and not isinstance(plan_world, ManipulationWorld):
             raise ConfigError(f"plan_world must be a ManipulationWorld or None, got {plan_world!r}")
-        self.check_hand(twin.world)
-        pw = twin.world if plan_world is None else plan_world
-        return twin.run(self.plan(pw, params), plan_world)
+        return self._execute(BoundTwin(twin, plan_world), params)
+
+    def _execute(self, body: Body, params: SkillParams) -> Outcome:
+        """Plan against the body's believed world and run the plan on the body: the one
+        path of :meth:`run` (the full robot) and :meth:`simulate` (the planning twin)."""
+        self.check_hand(body.world)  # where physics runs, before anything is planned
+        return body.run(self.plan(body.believed(), params))
 
     def check_hand(self, world: ManipulationWorld) -> None:
         """Raise :class:`ConfigError` when the skill grasps (:attr:`grasps`) and the

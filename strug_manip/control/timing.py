@@ -14,7 +14,7 @@ duration is the longer of
   ramp is all ramp).
 
 The full robot (:class:`~strug_manip.control.driver.JointDriver`) and the planning twin
-(:mod:`~strug_manip.control.twin`) time their motions with it, so that a skill takes
+(:mod:`~strug_manip.control.twin_body`) time their motions with it, so that a skill takes
 the same simulated time in both.
 """
 

@@ -8,7 +8,7 @@ the world axes and a ball joint at the palm, and drives it like an arm would:
 - **translation**: three position servos with integral action (MuJoCo's PID
   actuators, critically damped, integral time :data:`INTEGRAL_TIME`), each on a fixed
   tendon of the three slides: a direction of the hand's motion. The twin sets per run
-  the directions, gains and force limits (:mod:`strug_manip.control.twin`): the
+  the directions, gains and force limits (:mod:`strug_manip.control.twin_servo`): the
   principal axes and stiffnesses of the Fetch's arm and base servos seen at the hand at
   the grasp, and what the Fetch's joints can push along each (a reaching Fetch gives way
   horizontally, where its base yaws and its shoulder pans, far more than

@@ -1,5 +1,9 @@
 """The full robot: a :class:`~strug_manip.control.plan.SkillPlan` executed by the Fetch.
 
+One of the executor's two bodies (:class:`~.executor.Body`; the other is the planning
+twin, :mod:`.twin_body`): the stop rules, the stow and the outcome are the core's
+(:mod:`.executor`), the motions the Fetch's.
+
 :meth:`FullRobot.run` plans everything before anything moves, then executes it with
 MuJoCo physics stepping all along (:class:`~strug_manip.control.driver.JointDriver`):
 
@@ -20,7 +24,7 @@ MuJoCo physics stepping all along (:class:`~strug_manip.control.driver.JointDriv
    it carries the object), backs off and stows, so that the next skill can start;
 5. **stow**: back to the tuck (holding the object: to its carry posture), so the next
    skill may drive and the head camera sees the cabinet past the arm; planned with the
-   rest before anything moves (:func:`plan_stow`: from where the last line ends, the
+   rest before anything moves (:func:`~.executor.plan_stow`: from where the last line ends, the
    believed parts where the lines took them, back the way the hand came first).
 
 Collision checks and plans use ``plan_world`` (the believed cabinet; default the world
@@ -42,7 +46,21 @@ from planners.errors import ConfigError
 from strug_manip.control.contacts import ContactChecker
 from strug_manip.control.context import ControlContext
 from strug_manip.control.driver import JointDriver
-from strug_manip.control.grasps import held_grasp
+from strug_manip.control.executor import (
+    STOW_SEED,
+    cabinet_slid,
+    drive_posture,
+    facts_before,
+    grasp_lost,
+    held_back,
+    holds,
+    keeps_object,
+    near_posture,
+    plan_stow,
+    recovery_poses,
+    report,
+    stop_detail,
+)
 from strug_manip.control.motion import (
     NO_PLAN,
     ArmMotionPlanner,
@@ -54,12 +72,11 @@ from strug_manip.control.navigation import plan_route
 from strug_manip.control.outcome import Outcome, SkillStop, Status
 from strug_manip.control.params import DEFAULT_PARAMS, SkillParams
 from strug_manip.control.placement import Placement, find_placement
-from strug_manip.control.plan import Grip, Line, SkillPlan, retreat_poses
+from strug_manip.control.plan import Grip, Line, SkillPlan
 from strug_manip.robot.fetch import (
     ARM_TORSO_JOINTS,
     BASE_JOINTS,
     CARRY,
-    FINGERS_EMPTY,
     GRIPPER_SITE,
     GRIPPER_SQUEEZE,
     TUCK,
@@ -68,8 +85,6 @@ from strug_manip.world.sim import ManipulationWorld
 
 #: A callback told the name of each key instant of a run (e.g. to render a frame).
 Observer = Callable[[str], None]
-#: Joint distance from the tuck below which the arm counts as tucked [rad or m].
-TUCKED_TOLERANCE = 0.15
 
 
 @dataclass(frozen=True, eq=False)
@@ -95,154 +110,6 @@ class FreeMotion:
 def wrap_to(yaw: float, near: float) -> float:
     """``yaw`` [rad] plus the multiple of 2 pi that brings it closest to ``near``."""
     return near + (yaw - near + np.pi) % (2 * np.pi) - np.pi
-
-
-def ends_holding(plan: SkillPlan) -> bool:
-    """The plan ends with the fingers closed on something (a Pick)."""
-    closed = plan.carrying is not None
-    for ph in plan.phases:
-        if isinstance(ph, Grip):
-            closed = ph.closed
-    return closed
-
-
-def plan_stow(
-    ctx: ControlContext,
-    plan_world: ManipulationWorld,
-    placement: Placement,
-    params: SkillParams,
-    seed: int,
-) -> np.ndarray:
-    """Torso + arm waypoints (N, 8) from where ``placement``'s last line ends to the
-    drive posture (the tuck, or holding the object its carry posture), planned in
-    ``plan_world`` with the base where that line ends, every believed part moved where
-    the plan's lines took it and a held object attached as grasped; () for no motion.
-    The full robot plans it before it moves; the planning twin follows its first part,
-    :func:`stow_retreat`, out of the cabinet's way.
-
-    First back to the pre-grasp configuration (:func:`stow_retreat`, where that
-    straight line is free: the hand goes back the way it came) and from there: an arm
-    in an open drawer or over one is a narrow passage for the samplers, which spent
-    seconds on it (RRTConnect's budget, then LBKPIECE1's). Failing that, from where
-    the lines end.
-
-    Raises:
-        SkillStop: ``no_motion_plan``.
-    """
-    setup = _stow_setup(ctx, plan_world, placement)
-    checker, base, q_end, goal = setup
-    if _stowed(q_end, goal):
-        return np.zeros((0, len(goal)))
-    validity = ArmValidity(checker, base)
-    back = _retreat(setup, placement)
-    starts = [] if back is None else [back]
-    starts.append(np.zeros((0, len(goal))))
-    res = None
-    for prefix in starts:
-        start = prefix[-1] if len(prefix) else q_end
-        planners = ctx.planners(plan_world.model)
-        for i, planner in enumerate(planners):
-            res = planner.plan(
-                dict(zip(ARM_TORSO_JOINTS, start.tolist(), strict=True)),
-                dict(zip(ARM_TORSO_JOINTS, goal.tolist(), strict=True)),
-                validity,
-                timeout=params.planner_timeout(i, len(planners)),
-                seed=seed,
-            )
-            if res.success or res.reason != NO_PLAN:
-                break
-        if res.success:
-            return np.vstack([prefix, np.asarray(res.waypoints[1:])])
-    assert res is not None
-    raise SkillStop(Status.NO_MOTION_PLAN, f"{res.reason}: {res.detail}", "stow")
-
-
-def stow_retreat(
-    ctx: ControlContext, plan_world: ManipulationWorld, placement: Placement
-) -> tuple[np.ndarray, np.ndarray] | None:
-    """The stow's first waypoint (1, 8), the pre-grasp configuration, when the straight
-    joint-space line to it from where the lines end is free in ``plan_world`` (set up
-    as :func:`plan_stow` does), and the drive posture the stow ends in (8,); None when
-    the line is not free, or when the arm needs no stow."""
-    setup = _stow_setup(ctx, plan_world, placement)
-    _, _, q_end, goal = setup
-    if _stowed(q_end, goal):
-        return None
-    back = _retreat(setup, placement)
-    return None if back is None else (back, goal)
-
-
-_StowSetup = tuple[ContactChecker, np.ndarray, np.ndarray, np.ndarray]
-
-
-def _stowed(q: np.ndarray, goal: np.ndarray) -> bool:
-    """The arm (torso aside) of ``q`` is within :data:`TUCKED_TOLERANCE` of ``goal``."""
-    return bool(np.max(np.abs(q[1:] - goal[1:])) < TUCKED_TOLERANCE)
-
-
-def _retreat(setup: _StowSetup, placement: Placement) -> np.ndarray | None:
-    checker, base, q_end, _ = setup
-    q_pre = placement.q_pre
-    if not np.any(q_pre != q_end) or checker.segment(np.r_[base, q_end], np.r_[base, q_pre]):
-        return None
-    return np.asarray(q_pre, dtype=float)[None]
-
-
-def _stow_setup(
-    ctx: ControlContext, plan_world: ManipulationWorld, placement: Placement
-) -> _StowSetup:
-    """The checker of ``plan_world`` as the stow after ``placement`` sees it (parts where
-    the lines took them, the object released or held), the base, where the lines end
-    and the drive posture: ``(checker, base (3,), q_end (8,), goal (8,))``."""
-    plan = placement.plan
-    base, q_end = placement.start_of(len(placement.lines))
-    carrying = None
-    if ends_holding(plan):
-        if plan.carrying is not None:
-            carrying = plan.carrying
-        else:  # a Pick: the object as the plan grasps it (where the line to the
-            # closing grip ends)
-            grip, last = None, None
-            for ph in plan.phases:
-                if isinstance(ph, Grip) and ph.closed and last is not None:
-                    grip = last.poses[-1]
-                elif isinstance(ph, Line):
-                    last = ph
-            grip = plan.pre if grip is None else grip
-            carrying = ("object", np.linalg.inv(grip) @ plan_world.object_pose())
-    goal = np.array(TUCK if carrying is None else CARRY[held_grasp(carrying[1])])
-    checker = ctx.checker(plan_world.model).load(plan_world.data)
-    if plan.carrying is not None and carrying is None:  # a Place: the object left there
-        checker.set_pose(plan.carrying[0], _release_pose(plan) @ plan.carrying[1])
-    for line in plan.lines:
-        if line.part_joint is not None and line.part_q is not None:
-            checker.set({line.part_joint: float(line.part_q[-1])})
-    checker.attach(*carrying) if carrying is not None else checker.attach(None)
-    checker.allow()
-    return checker, base, q_end, goal
-
-
-def recovery_poses(T_world_gripper: np.ndarray, params: SkillParams) -> tuple[np.ndarray, float]:
-    """The straight back-off after a stop: ``retreat_distance`` against the gripper's
-    approach from ``T_world_gripper`` (4, 4): ``(poses (N, 4, 4), length [m])``."""
-    return retreat_poses(T_world_gripper, params.retreat_distance, params.line_step)
-
-
-def _release_pose(plan: SkillPlan) -> np.ndarray:
-    """``T_world_gripper`` (4, 4) where ``plan`` opens its fingers (the end of the line
-    before the opening grip)."""
-    last = None
-    for ph in plan.phases:
-        if isinstance(ph, Grip) and not ph.closed:
-            break
-        if isinstance(ph, Line):
-            last = ph
-    return plan.pre if last is None else last.poses[-1]
-
-
-#: Seed offset of the stow's plan (independent of how many plans came before it, so
-#: that the planning twin plans the same one).
-STOW_SEED = 7919
 
 
 class FullRobot:
@@ -285,12 +152,10 @@ class FullRobot:
         self.drv = JointDriver(self.world, self.params.time_budget, self.params.record_period)
         self.ik_seconds = self.plan_seconds = 0.0
         self.n_plans = 0
-        parts0 = self.world.part_positions()
-        cab0 = self._cab0 = self.world.cabinet_displacement_vector()
+        before = facts_before(self.world)
+        self._cab0 = before[1]
         phase = "plan"
         try:
-            # Whether this skill carries the object (a stop keeps holding it then).
-            self._carrier = plan.carrying is not None or ends_holding(plan)
             self._plan = plan
             placement, free = self._plan_free(plan)
             plan = placement.plan  # the fingers may be swapped
@@ -316,10 +181,8 @@ class FullRobot:
             detail = stop.detail
             if phase not in ("plan", "reach"):  # the hand is at the part: let go, back off
                 detail += self._recover()
-            return self._outcome(
-                plan, stop.status, detail, stop.phase or phase, parts0, cab0, t_wall
-            )
-        return self._outcome(plan, Status.OK, "", "", parts0, cab0, t_wall)
+            return self._outcome(plan, stop.status, detail, stop.phase or phase, before, t_wall)
+        return self._outcome(plan, Status.OK, "", "", before, t_wall)
 
     def _recover(self) -> str:
         """After a stop at the part: open the fingers (a skill that carries the object
@@ -330,7 +193,8 @@ class FullRobot:
         p = self.params
         # Hold where the arm and base stopped, not their old commands.
         self.drv.arm_cmd, self.drv.base_target = self.drv.q, self.drv.base
-        carrying = self._carried() if self._holding() and self._carrier else None
+        keeps = keeps_object(self._plan, self.drv.grip_cmd, self._fingers())
+        carrying = self._carried() if keeps else None
         if carrying is None:
             self.drv.grip(False, p.grip_time, GRIPPER_SQUEEZE)
         start = self._command()
@@ -355,7 +219,7 @@ class FullRobot:
             if backs_off:
                 self.drv.follow(list(track.q), max(0.3, length / p.retreat_speed), monitor=monitor)
                 self.drv.hold(p.settle_time)
-            goal = self._drive_posture(carrying)
+            goal = drive_posture(carrying)
             try:
                 path = self._plan_arm(self.drv.q, goal, carrying, phase="recovery")
             except SkillStop as stop:
@@ -369,14 +233,15 @@ class FullRobot:
         return "" if backs_off else "; recovery: no free IK path to back off, stowed from there"
 
     # -- planning ------------------------------------------------------------------------
-    def _sync(self) -> ManipulationWorld:
-        """The planning world with the robot's and the object's state of ``world``."""
+    def believed(self) -> ManipulationWorld:
+        """The planning world with the robot's and the object's state of ``world``: what
+        skills plan against (:class:`~.executor.Body`)."""
         if self.plan_world is not self.world:
             self.plan_world.copy_robot_state(self.world)
         return self.plan_world
 
     def _checker(self, carrying: tuple[str, np.ndarray] | None):
-        pw = self._sync()
+        pw = self.believed()
         checker = self.ctx.checker(pw.model).load(pw.data)
         if carrying is None:
             checker.attach(None)
@@ -403,7 +268,7 @@ class FullRobot:
         may drive like that (tucked or carrying), else the posture it will drive in."""
         if self._tucked():
             return self.drv.q
-        return self._drive_posture(plan.carrying)
+        return drive_posture(plan.carrying)
 
     def _plan_arm(
         self,
@@ -496,16 +361,16 @@ class FullRobot:
 
     # -- motions -------------------------------------------------------------------------
     def _near(self, posture: Sequence[float]) -> bool:
-        """The arm (torso aside) is within :data:`TUCKED_TOLERANCE` of ``posture``."""
-        return bool(np.max(np.abs(self.drv.q[1:] - np.array(posture)[1:])) < TUCKED_TOLERANCE)
+        """The arm (torso aside) is within :data:`~.executor.TUCKED_TOLERANCE` of ``posture``."""
+        return near_posture(self.drv.q, np.array(posture))
 
     def _tucked(self) -> bool:
         """The arm is in (or near) its tuck or a carry posture: it may drive."""
         return any(self._near(p) for p in (TUCK, *CARRY.values()))
 
-    def _holding(self) -> bool:
-        fingers = float(self.world.data.ten_length[self.world.model.tendon("gripper").id])
-        return self.drv.grip_cmd == GRIPPER_SQUEEZE and fingers > FINGERS_EMPTY
+    def _fingers(self) -> float:
+        """How far apart the fingers stand [m] (the gripper tendon's length)."""
+        return float(self.world.data.ten_length[self.world.model.tendon("gripper").id])
 
     def _plan_free(self, plan: SkillPlan) -> tuple[Placement, FreeMotion]:
         """The first placement (best first) whose free motions plan: the stow (if the
@@ -529,7 +394,7 @@ class FullRobot:
         if not (far or turn):
             reach = self._plan_arm(self.drv.q, q_pre, carrying, phase="reach")
             return FreeMotion(None, None, None, reach, after)
-        drive_q = self._drive_posture(carrying)
+        drive_q = drive_posture(carrying)
         stow = None
         if not self._near(drive_q):
             stow = self._plan_arm(self.drv.q, drive_q, carrying, phase="stow before driving")
@@ -547,7 +412,8 @@ class FullRobot:
         """The stow after the skill (:func:`plan_stow`), planned before anything moves."""
         t = time.perf_counter()
         try:
-            return plan_stow(self.ctx, self._sync(), placement, self.params, self.seed + STOW_SEED)
+            pw = self.believed()
+            return plan_stow(self.ctx, pw, placement, self.params, self.seed + STOW_SEED)
         finally:
             self.plan_seconds += time.perf_counter() - t
 
@@ -560,11 +426,6 @@ class FullRobot:
             self.drv.drive(free.route, torso=free.torso)
         self.drv.follow(list(free.reach), 0.3, monitor=self._line_monitor(None))
         self.drv.hold(self.params.settle_time)
-
-    def _drive_posture(self, carrying: tuple[str, np.ndarray] | None) -> np.ndarray:
-        """Torso + arm the robot drives in: tucked, or carrying the object in its grasp's
-        carry posture."""
-        return np.array(TUCK if carrying is None else CARRY[held_grasp(carrying[1])])
 
     def _touched(self) -> list[str]:
         """The bodies the current skill's lines may touch (its part, the object)."""
@@ -603,15 +464,13 @@ class FullRobot:
         name = "free motion" if line is None else line.name
 
         def monitor(_: float) -> None:
-            if line is not None and line.holding and float(d.ten_length[tendon]) < FINGERS_EMPTY:
-                raise SkillStop(Status.GRASP_LOST, f"the fingers closed on nothing ({name})")
+            if line is not None and grasp_lost(line.holding, float(d.ten_length[tendon])):
+                raise SkillStop(Status.GRASP_LOST, stop_detail(Status.GRASP_LOST, name))
             self._check_slide(self._cab0, name)
             cmd = self.ctx.ik.forward(self._command())
             lag = float(np.linalg.norm(cmd[:3, 3] - d.site_xpos[site]))
-            if lag > tol:
-                raise SkillStop(
-                    Status.COLLISION, f"the gripper is held back {lag:.3f} m from its path ({name})"
-                )
+            if held_back(lag, tol):
+                raise SkillStop(Status.COLLISION, stop_detail(Status.COLLISION, name, lag))
 
         return monitor
 
@@ -619,8 +478,8 @@ class FullRobot:
         """Stop (``cabinet_moved``) when the cabinet base is more than
         ``cabinet_motion_limit`` from ``ref`` (a displacement vector (2,) [m])."""
         slid = float(np.linalg.norm(self.world.cabinet_displacement_vector() - ref))
-        if slid > self.params.cabinet_motion_limit:
-            raise SkillStop(Status.CABINET_MOVED, f"the cabinet slid {slid:.3f} m ({name})")
+        if cabinet_slid(slid, self.params):
+            raise SkillStop(Status.CABINET_MOVED, stop_detail(Status.CABINET_MOVED, name, slid))
 
     def _command(self) -> dict[str, float]:
         return {
@@ -640,31 +499,14 @@ class FullRobot:
         status: Status,
         detail: str,
         phase: str,
-        parts0: dict[str, float],
-        cab0: np.ndarray,
+        before: tuple[dict[str, float], np.ndarray],
         t_wall: float,
     ) -> Outcome:
-        w = self.world
-        mujoco.mj_forward(w.model, w.data)
-        parts = w.part_positions()
+        mujoco.mj_forward(self.world.model, self.world.data)
         times, qpos = self.drv.recording()
-        return Outcome(
-            skill=plan.skill,
-            status=status,
-            detail=detail,
-            phase=phase,
-            part_motion={j: parts[j] - parts0[j] for j in parts},
-            part_units=w.part_units(),
-            part_positions=parts,
-            cabinet_displacement=w.cabinet_displacement(),
-            cabinet_motion=float(np.linalg.norm(w.cabinet_displacement_vector() - cab0)),
-            object_pose=w.object_pose(),
-            holding=self._holding(),
-            times=times,
-            qpos=qpos,
-            sim_time=self.drv.elapsed,
-            wall_seconds=time.perf_counter() - t_wall,
-            ik_seconds=self.ik_seconds,
-            planning_seconds=self.plan_seconds,
-            physics_seconds=self.drv.physics_seconds,
-        )
+        return report(
+            self.world, plan, status, detail, phase, before,
+            holding=holds(self.drv.grip_cmd, self._fingers()), times=times, qpos=qpos,
+            sim_time=self.drv.elapsed, t_wall=t_wall, ik_seconds=self.ik_seconds,
+            planning_seconds=self.plan_seconds, physics_seconds=self.drv.physics_seconds,
+        )  # fmt: skip

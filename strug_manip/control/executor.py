@@ -1,0 +1,327 @@
+"""The executor core: what the full robot and the planning twin share.
+
+A skill's :class:`~strug_manip.control.plan.SkillPlan` runs on one of two bodies, the
+full Fetch (:class:`~strug_manip.control.fetch_body.FullRobot`: base, IK, OMPL, arm
+physics) and the Fetch's floating hand (:class:`~strug_manip.control.twin_body.
+PlanningTwin`, the search's fast twin). Both implement :class:`Body` and differ only in
+how they move; what decides how a run goes and what it reports is here, once:
+
+- **the stop rules** (:func:`grasp_lost`, :func:`cabinet_slid`, :func:`held_back`, their
+  reasons :func:`stop_detail`), checked while a motion runs (the full robot every
+  control tick, the twin on its rollout's states, vectorised), and what counts as
+  holding the object (:func:`holds`, :func:`keeps_object`);
+- **the stow** after a skill (:func:`plan_stow`, its first part :func:`stow_retreat`,
+  seeded by :data:`STOW_SEED`) and the back-off after a stop (:func:`recovery_poses`);
+- **the outcome**: the facts measured before (:func:`facts_before`) and after
+  (:func:`report`) a run.
+
+A change to a rule is made here, and both bodies follow it.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Protocol
+
+import numpy as np
+
+from strug_manip.control.contacts import ContactChecker
+from strug_manip.control.context import ControlContext
+from strug_manip.control.grasps import held_grasp
+from strug_manip.control.motion import NO_PLAN, ArmValidity
+from strug_manip.control.outcome import Outcome, SkillStop, Status
+from strug_manip.control.params import SkillParams
+from strug_manip.control.placement import Placement
+from strug_manip.control.plan import Grip, Line, SkillPlan, retreat_poses
+from strug_manip.robot.fetch import (
+    ARM_TORSO_JOINTS,
+    CARRY,
+    FINGERS_EMPTY,
+    GRIPPER_SQUEEZE,
+    TUCK,
+)
+from strug_manip.world.sim import ManipulationWorld
+
+#: Joint distance from the tuck below which the arm counts as tucked [rad or m].
+TUCKED_TOLERANCE = 0.15
+
+
+class Body(Protocol):
+    """What runs a skill plan: the full robot or the planning twin.
+
+    Attributes:
+        world: where physics runs and the outcome is measured.
+        ctx: the shared solvers and caches.
+        params: the skills' constants.
+    """
+
+    world: ManipulationWorld
+    ctx: ControlContext
+    params: SkillParams
+
+    def believed(self) -> ManipulationWorld:
+        """The world skills plan against (the believed cabinet), in the body's state."""
+        ...
+
+    def run(self, plan: SkillPlan) -> Outcome:
+        """Execute ``plan``; never raises for a failure of the skill (the
+        :class:`Outcome` says how it ended)."""
+        ...
+
+
+# -- the stop rules --------------------------------------------------------------------
+# Each takes scalars (the full robot, at every control tick) or arrays (the twin, over
+# a rollout's states) alike.
+Values = float | np.ndarray
+Flags = bool | np.ndarray
+
+
+def grasp_lost(holding: Flags, fingers: Values) -> Flags:
+    """Stop rule ``grasp_lost``: where the fingers should hold something (``holding``)
+    and their opening ``fingers`` [m] says they closed on nothing."""
+    return holding & (fingers < FINGERS_EMPTY)
+
+
+def cabinet_slid(slid: Values, params: SkillParams) -> Flags:
+    """Stop rule ``cabinet_moved``: the cabinet base has slid ``slid`` [m] (since the
+    skill started, or a recovery) more than ``cabinet_motion_limit``."""
+    return slid > params.cabinet_motion_limit
+
+
+def held_back(lag: Values, tol: Values) -> Flags:
+    """Stop rule ``collision``: the gripper is ``lag`` [m] behind its commanded pose,
+    more than the tracking tolerance ``tol`` [m] (the arm or hand is blocked)."""
+    return lag > tol
+
+
+def stop_detail(status: Status, name: str, amount: float = 0.0) -> str:
+    """Why a stop rule stopped the motion ``name``: ``amount`` is how far the cabinet
+    slid or the gripper lags [m]."""
+    if status is Status.GRASP_LOST:
+        return f"the fingers closed on nothing ({name})"
+    if status is Status.CABINET_MOVED:
+        return f"the cabinet slid {amount:.3f} m ({name})"
+    return f"the gripper is held back {amount:.3f} m from its path ({name})"
+
+
+def holds(grip_cmd: float, fingers: float) -> bool:
+    """The gripper holds something: its fingers are commanded to squeeze and stand
+    apart (``fingers`` [m]) on something."""
+    return grip_cmd == GRIPPER_SQUEEZE and fingers > FINGERS_EMPTY
+
+
+def keeps_object(plan: SkillPlan, grip_cmd: float, fingers: float) -> bool:
+    """After a stop the gripper keeps what it holds (else it lets go) when the skill
+    carries the object (a Place, or a plan that ends holding: a Pick)."""
+    carrier = plan.carrying is not None or ends_holding(plan)
+    return carrier and holds(grip_cmd, fingers)
+
+
+# -- the stow --------------------------------------------------------------------------
+
+
+def ends_holding(plan: SkillPlan) -> bool:
+    """The plan ends with the fingers closed on something (a Pick)."""
+    closed = plan.carrying is not None
+    for ph in plan.phases:
+        if isinstance(ph, Grip):
+            closed = ph.closed
+    return closed
+
+
+def plan_stow(
+    ctx: ControlContext,
+    plan_world: ManipulationWorld,
+    placement: Placement,
+    params: SkillParams,
+    seed: int,
+) -> np.ndarray:
+    """Torso + arm waypoints (N, 8) from where ``placement``'s last line ends to the
+    drive posture (the tuck, or holding the object its carry posture), planned in
+    ``plan_world`` with the base where that line ends, every believed part moved where
+    the plan's lines took it and a held object attached as grasped; () for no motion.
+    The full robot plans it before it moves; the planning twin follows its first part,
+    :func:`stow_retreat`, out of the cabinet's way.
+
+    First back to the pre-grasp configuration (:func:`stow_retreat`, where that
+    straight line is free: the hand goes back the way it came) and from there: an arm
+    in an open drawer or over one is a narrow passage for the samplers, which spent
+    seconds on it (RRTConnect's budget, then LBKPIECE1's). Failing that, from where
+    the lines end.
+
+    Raises:
+        SkillStop: ``no_motion_plan``.
+    """
+    setup = _stow_setup(ctx, plan_world, placement)
+    checker, base, q_end, goal = setup
+    if near_posture(q_end, goal):
+        return np.zeros((0, len(goal)))
+    validity = ArmValidity(checker, base)
+    back = _retreat(setup, placement)
+    starts = [] if back is None else [back]
+    starts.append(np.zeros((0, len(goal))))
+    res = None
+    for prefix in starts:
+        start = prefix[-1] if len(prefix) else q_end
+        planners = ctx.planners(plan_world.model)
+        for i, planner in enumerate(planners):
+            res = planner.plan(
+                dict(zip(ARM_TORSO_JOINTS, start.tolist(), strict=True)),
+                dict(zip(ARM_TORSO_JOINTS, goal.tolist(), strict=True)),
+                validity,
+                timeout=params.planner_timeout(i, len(planners)),
+                seed=seed,
+            )
+            if res.success or res.reason != NO_PLAN:
+                break
+        if res.success:
+            return np.vstack([prefix, np.asarray(res.waypoints[1:])])
+    assert res is not None
+    raise SkillStop(Status.NO_MOTION_PLAN, f"{res.reason}: {res.detail}", "stow")
+
+
+def stow_retreat(
+    ctx: ControlContext, plan_world: ManipulationWorld, placement: Placement
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """The stow's first waypoint (1, 8), the pre-grasp configuration, when the straight
+    joint-space line to it from where the lines end is free in ``plan_world`` (set up
+    as :func:`plan_stow` does), and the drive posture the stow ends in (8,); None when
+    the line is not free, or when the arm needs no stow."""
+    setup = _stow_setup(ctx, plan_world, placement)
+    _, _, q_end, goal = setup
+    if near_posture(q_end, goal):
+        return None
+    back = _retreat(setup, placement)
+    return None if back is None else (back, goal)
+
+
+_StowSetup = tuple[ContactChecker, np.ndarray, np.ndarray, np.ndarray]
+
+
+def near_posture(q: np.ndarray, goal: np.ndarray) -> bool:
+    """The arm (torso aside) of torso + arm ``q`` (8,) is within
+    :data:`TUCKED_TOLERANCE` of ``goal`` (8,)."""
+    return bool(np.max(np.abs(q[1:] - goal[1:])) < TUCKED_TOLERANCE)
+
+
+def drive_posture(carrying: tuple[str, np.ndarray] | None) -> np.ndarray:
+    """Torso + arm (8,) the robot drives and stows in: tucked, or carrying the object
+    (``(name, T_gripper_object)``) in its grasp's carry posture."""
+    return np.array(TUCK if carrying is None else CARRY[held_grasp(carrying[1])])
+
+
+def _retreat(setup: _StowSetup, placement: Placement) -> np.ndarray | None:
+    checker, base, q_end, _ = setup
+    q_pre = placement.q_pre
+    if not np.any(q_pre != q_end) or checker.segment(np.r_[base, q_end], np.r_[base, q_pre]):
+        return None
+    return np.asarray(q_pre, dtype=float)[None]
+
+
+def _stow_setup(
+    ctx: ControlContext, plan_world: ManipulationWorld, placement: Placement
+) -> _StowSetup:
+    """The checker of ``plan_world`` as the stow after ``placement`` sees it (parts where
+    the lines took them, the object released or held), the base, where the lines end
+    and the drive posture: ``(checker, base (3,), q_end (8,), goal (8,))``."""
+    plan = placement.plan
+    base, q_end = placement.start_of(len(placement.lines))
+    carrying = None
+    if ends_holding(plan):
+        if plan.carrying is not None:
+            carrying = plan.carrying
+        else:  # a Pick: the object as the plan grasps it (where the line to the
+            # closing grip ends)
+            grip, last = None, None
+            for ph in plan.phases:
+                if isinstance(ph, Grip) and ph.closed and last is not None:
+                    grip = last.poses[-1]
+                elif isinstance(ph, Line):
+                    last = ph
+            grip = plan.pre if grip is None else grip
+            carrying = ("object", np.linalg.inv(grip) @ plan_world.object_pose())
+    goal = drive_posture(carrying)
+    checker = ctx.checker(plan_world.model).load(plan_world.data)
+    if plan.carrying is not None and carrying is None:  # a Place: the object left there
+        checker.set_pose(plan.carrying[0], _release_pose(plan) @ plan.carrying[1])
+    for line in plan.lines:
+        if line.part_joint is not None and line.part_q is not None:
+            checker.set({line.part_joint: float(line.part_q[-1])})
+    checker.attach(*carrying) if carrying is not None else checker.attach(None)
+    checker.allow()
+    return checker, base, q_end, goal
+
+
+def recovery_poses(T_world_gripper: np.ndarray, params: SkillParams) -> tuple[np.ndarray, float]:
+    """The straight back-off after a stop: ``retreat_distance`` against the gripper's
+    approach from ``T_world_gripper`` (4, 4): ``(poses (N, 4, 4), length [m])``."""
+    return retreat_poses(T_world_gripper, params.retreat_distance, params.line_step)
+
+
+def _release_pose(plan: SkillPlan) -> np.ndarray:
+    """``T_world_gripper`` (4, 4) where ``plan`` opens its fingers (the end of the line
+    before the opening grip)."""
+    last = None
+    for ph in plan.phases:
+        if isinstance(ph, Grip) and not ph.closed:
+            break
+        if isinstance(ph, Line):
+            last = ph
+    return plan.pre if last is None else last.poses[-1]
+
+
+#: Seed offset of the stow's plan (independent of how many plans came before it, so
+#: that the planning twin plans the same one).
+STOW_SEED = 7919
+
+
+# -- the outcome -----------------------------------------------------------------------
+
+
+def facts_before(world: ManipulationWorld) -> tuple[dict[str, float], np.ndarray]:
+    """What a run's outcome is measured against: the part positions and the cabinet's
+    displacement vector (2,) [m] of ``world`` before the skill."""
+    return world.part_positions(), world.cabinet_displacement_vector()
+
+
+def report(
+    world: ManipulationWorld,
+    plan: SkillPlan,
+    status: Status,
+    detail: str,
+    phase: str,
+    before: tuple[dict[str, float], np.ndarray],
+    *,
+    holding: bool,
+    times: np.ndarray,
+    qpos: np.ndarray,
+    sim_time: float,
+    t_wall: float,
+    ik_seconds: float,
+    planning_seconds: float,
+    physics_seconds: float,
+) -> Outcome:
+    """The :class:`Outcome` of a run of ``plan`` that ended in ``world`` as it is now,
+    the parts and the cabinet compared with ``before`` (:func:`facts_before`)."""
+    parts0, cab0 = before
+    parts = world.part_positions()
+    return Outcome(
+        skill=plan.skill,
+        status=status,
+        detail=detail,
+        phase=phase,
+        part_motion={j: parts[j] - parts0[j] for j in parts},
+        part_units=world.part_units(),
+        part_positions=parts,
+        cabinet_displacement=world.cabinet_displacement(),
+        cabinet_motion=float(np.linalg.norm(world.cabinet_displacement_vector() - cab0)),
+        object_pose=world.object_pose(),
+        holding=holding,
+        times=times,
+        qpos=qpos,
+        sim_time=sim_time,
+        wall_seconds=time.perf_counter() - t_wall,
+        ik_seconds=ik_seconds,
+        planning_seconds=planning_seconds,
+        physics_seconds=physics_seconds,
+    )

@@ -1,0 +1,291 @@
+"""The planning twin's rollouts: a program's controls, the stop rules of the executor
+core (:mod:`.executor`) judged on the rollout's states, what follows a stop (the full
+robot's recovery) or the last release (the free steps, coarser; the coast).
+:class:`TwinRollout` is the part of :class:`~strug_manip.control.twin_body.PlanningTwin`
+that runs them."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+from mujoco import rollout
+
+import strug_manip.control.timing as timing
+from strug_manip.control.driver import MONITOR_PERIOD
+from strug_manip.control.executor import (
+    cabinet_slid,
+    grasp_lost,
+    held_back,
+    keeps_object,
+    recovery_poses,
+    stop_detail,
+)
+from strug_manip.control.outcome import Status
+from strug_manip.control.rotations import x_axes
+from strug_manip.control.twin_program import COAST_TIME, Program
+from strug_manip.robot.fetch import GRIPPER_OPEN, GRIPPER_SQUEEZE
+from strug_manip.world.floating_gripper import ARM_PARK
+
+#: After the last release (the fingers open, the hand backs away in free space: the
+#: retreat, the withdraw, the stow, the coast) the twin steps this many times coarser
+#: [-]: those motions seldom touch anything, and they are about 40 % of a run's steps.
+#: Where they do touch (an arm link knocking an open door on the stow), the coarser
+#: step can knock harder (1 of 200 tuning runs changed; README).
+FREE_COARSENING = 2
+#: An arm link that enters the scene (after the last release) deeper than this in
+#: something [m] stays parked (:meth:`PlanningTwin._arm_starts_inside`): a link
+#: resting against a door is simulated, one inside a part is not.
+ARM_ENTRY_DEPTH = 0.005
+#: A cabinet at rest: every joint of it (the parts, the base's free joint) slower than
+#: this [m/s or rad/s] (a drawer of a tilted cabinet creeping out moves 0.02 m/s).
+REST_SPEED = 0.005
+#: Where the TCP (the ``gripper`` site) is in the hand's frame [m] (fetch.xml).
+TCP_OFFSET = 0.02
+#: What a rollout's states hold (MuJoCo's full physics: time, qpos, qvel, act, ...).
+ROLLOUT_STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
+#: What a check on the side saves and puts back: the state and the controls.
+SAVED_STATE = int(mujoco.mjtState.mjSTATE_INTEGRATION)
+#: What a rollout's controls set every step: the actuators' controls and the mocap
+#: bodies' poses (the believed robot base, the arm links).
+CONTROL = int(
+    mujoco.mjtState.mjSTATE_CTRL
+    | mujoco.mjtState.mjSTATE_MOCAP_POS
+    | mujoco.mjtState.mjSTATE_MOCAP_QUAT
+)
+
+
+class TwinRollout:
+    """The planning twin's rollouts (a mixin of
+    :class:`~strug_manip.control.twin_body.PlanningTwin`, whose state it uses)."""
+
+    def controls(self, prog: Program) -> np.ndarray:
+        """The twin's control vectors at every step of ``prog``, (nstep, nu + 7 nmocap):
+        the actuators' controls, then the mocap bodies' positions and orientations
+        (:data:`CONTROL`)."""
+        return self._controls(prog.drive_pos, prog.drive_quat, prog.grip, prog.holds, prog.arm)
+
+    def recovery(self, prog: Program, state: np.ndarray) -> np.ndarray:
+        """The controls (nstep, nu) of the full robot's recovery after a stop in
+        ``state`` (a rollout state): the hand holds where it is while the fingers open
+        (a skill that carries the object and holds it keeps it), then backs off along
+        its approach (:func:`~strug_manip.control.executor.recovery_poses`) and
+        settles."""
+        m, p = self.world.model, self.params
+        dt = m.opt.timestep
+        qpos = state[1 : 1 + m.nq]
+        quat = qpos[self._ball_adr : self._ball_adr + 4].copy()
+        T = np.eye(4)
+        mujoco.mju_quat2Mat(T[:3, :3].reshape(9), quat)
+        T[:3, 3] = qpos[self._slide_adr] + TCP_OFFSET * T[:3, 0]
+        fingers = 0.5 * (qpos[self._fingers[0]] + qpos[self._fingers[1]])
+        keep = keeps_object(prog.plan, self.grip_cmd_at_stop, fingers)
+        grip = GRIPPER_SQUEEZE if keep else GRIPPER_OPEN
+        self._recovery_grip = grip
+        n_grip = 0 if keep else max(1, round(p.grip_time / dt))
+        poses, length = recovery_poses(T, p)
+        seconds = max(0.3, length / p.retreat_speed)
+        pts = np.vstack([T[:3, 3], poses[:, :3, 3]])
+        back = timing.samples(pts, seconds, dt)
+        n_settle = max(1, round(p.settle_time / dt))
+        pos = np.vstack([np.repeat(T[None, :3, 3], n_grip, axis=0), back,
+                         np.repeat(back[-1:], n_settle, axis=0)])  # fmt: skip
+        holds = np.ones(len(pos), dtype=bool)
+        holds[n_grip : n_grip + len(back)] = False
+        return self._controls(pos, np.repeat(quat[None], len(pos), axis=0),
+                              np.full(len(pos), grip), holds)  # fmt: skip
+
+    def _controls(
+        self,
+        pos: np.ndarray,
+        quat: np.ndarray,
+        grip: np.ndarray,
+        holds: np.ndarray,
+        arm: np.ndarray | None = None,
+    ) -> np.ndarray:
+        dt = self.world.model.opt.timestep
+        origin = pos - TCP_OFFSET * x_axes(quat)
+        vel = np.zeros_like(origin)
+        vel[1:] = np.diff(origin, axis=0) / dt
+        vel[holds] = 0.0
+        ctrl = np.repeat(self.world.data.ctrl[None].copy(), len(origin), axis=0)
+        ctrl[:, self._slide_ctrl] = origin @ self._axes
+        ctrl[:, self._slide_ctrl + 1] = vel @ self._axes
+        ctrl[:, self._rot_ctrl : self._rot_ctrl + 4] = quat
+        ctrl[:, self._grip_ctrl] = grip
+        d, nm = self.world.data, self.world.model.nmocap
+        mpos = np.repeat(d.mocap_pos[None].copy(), len(origin), axis=0)
+        mquat = np.repeat(d.mocap_quat[None].copy(), len(origin), axis=0)
+        arm = np.repeat(self._parked_arm()[None], len(origin), axis=0) if arm is None else arm
+        mpos[:, self._arm_mocap] = arm[:, :, :3]
+        mquat[:, self._arm_mocap] = arm[:, :, 3:]
+        return np.hstack([ctrl, mpos.reshape(-1, 3 * nm), mquat.reshape(-1, 4 * nm)])
+
+    def park_arm(self, ctrl: np.ndarray) -> np.ndarray:
+        """Control rows (n, nu + 7 nmocap) with the arm links parked."""
+        out = ctrl.copy()
+        nu, nm = self.world.model.nu, self.world.model.nmocap
+        mpos = out[:, nu : nu + 3 * nm].reshape(-1, nm, 3)
+        mquat = out[:, nu + 3 * nm :].reshape(-1, nm, 4)
+        mpos[:, self._arm_mocap] = ARM_PARK
+        mquat[:, self._arm_mocap] = (1.0, 0.0, 0.0, 0.0)
+        return out
+
+    def judge(self, prog: Program, states: np.ndarray) -> tuple[int, Status, str, str]:
+        """The first step whose monitors stop the run (a lost grasp where the fingers
+        should hold, the cabinet slid more than ``cabinet_motion_limit`` since the
+        skill started, the hand more than the tracking tolerance behind its command,
+        checked every 10 ms as on the full robot) and why; the last step if none."""
+        m = self.world.model
+        qpos = states[:, 1 : 1 + m.nq]
+        slid = self._slid(states, self.cabinet_xy0)
+        fingers = 0.5 * (qpos[:, self._fingers[0]] + qpos[:, self._fingers[1]])
+        tcp = qpos[:, self._slide_adr] + TCP_OFFSET * x_axes(
+            qpos[:, self._ball_adr : self._ball_adr + 4]
+        )
+        lag = np.linalg.norm(tcp - prog.pos, axis=1)
+        every = self._check_every()
+        check = np.zeros(len(lag), dtype=bool)
+        check[every - 1 :: every] = True
+        check[prog.phase_ends] = True
+        check[-1] = True
+        lost = check & grasp_lost(prog.held, fingers)
+        moved = check & cabinet_slid(slid, self.params)
+        blocked = check & held_back(lag, prog.tol)
+        blocked &= ~prog.holds | np.r_[prog.holds[1:] != prog.holds[:-1], False]
+        stops = np.flatnonzero(lost | moved | blocked)
+        if not len(stops):
+            return len(lag) - 1, Status.OK, "", ""
+        k = int(stops[0])
+        name = str(prog.names[k])
+        if lost[k]:
+            return k, Status.GRASP_LOST, stop_detail(Status.GRASP_LOST, name), name
+        if moved[k]:
+            return k, Status.CABINET_MOVED, stop_detail(Status.CABINET_MOVED, name, slid[k]), name
+        return k, Status.COLLISION, stop_detail(Status.COLLISION, name, lag[k]), name
+
+    def after(
+        self, prog: Program, ctrl: np.ndarray, states: np.ndarray, judged: tuple
+    ) -> tuple[np.ndarray | None, tuple[int, Status, str, str]]:
+        """What follows the rollout ``states`` of the program's steps before
+        ``prog.free`` (``ctrl``: the whole program's controls), as the full robot goes
+        on: after a stop the recovery; else the free steps (after the last release)
+        :data:`FREE_COARSENING` times coarser, monitored, and the recovery if they stop;
+        then the coast with the hand out of the scene. Returns the states that follow
+        the head's judged step (None if none) and the run's verdict, its step index
+        that of the head's last state when the head ran through."""
+        m = self.world.model
+        dt = m.opt.timestep
+        k, status = judged[0], judged[1]
+        start, parts, final = states[k], [], judged
+        stop_prog, stop_k, last = prog, k, ctrl[k : k + 1]
+        try:
+            if status is Status.OK and prog.free < len(prog.pos):
+                m.opt.timestep = dt * FREE_COARSENING
+                sl = slice(prog.free, None, FREE_COARSENING)
+                stop_prog, tail_ctrl = prog.steps(sl), ctrl[sl]
+                if self._arm_starts_inside(start, tail_ctrl[0]):
+                    tail_ctrl = self.park_arm(tail_ctrl)
+                st, _ = rollout.rollout(m, self.world.data, start[None], tail_ctrl[None],
+                                        control_spec=CONTROL)  # fmt: skip
+                j = self.judge(stop_prog, st[0])
+                stop_k, start, last = j[0], st[0][j[0]], tail_ctrl[j[0] : j[0] + 1]
+                parts.append(st[0][: j[0] + 1])
+                final = (k, *j[1:])
+            elif status is Status.OK and not prog.coast:
+                return None, judged  # ends holding: nothing follows
+            if final[1] is not Status.OK:
+                self.grip_cmd_at_stop = float(stop_prog.grip[stop_k])
+                extra = self.recovery(stop_prog, start)
+                rec, _ = rollout.rollout(m, self.world.data, start[None], extra[None],
+                                         control_spec=CONTROL)  # fmt: skip
+                rec = self._until_slid(rec[0], start)
+                parts.append(rec)
+                start, last = rec[-1], extra[len(rec) - 1 : len(rec)]
+            budget = prog.coast if final[1] is Status.OK else 0
+            budget = round(budget * dt / m.opt.timestep)
+            parts.append(self.coast(start, self.park_arm(last), budget))
+        finally:
+            m.opt.timestep = dt
+        return np.concatenate(parts), final
+
+    def _arm_starts_inside(self, start: np.ndarray, row: np.ndarray) -> bool:
+        """Whether the arm's links, set where control ``row`` (nu + 7 nmocap) puts them
+        in rollout state ``start``, reach more than :data:`ARM_ENTRY_DEPTH` into
+        anything. The links are simulated only after the last release and enter the
+        scene there at once; a link inside this particle's cabinet (its parts are not
+        where the model the path was planned in has them) would be pushed out with an
+        impulse no arm exerts, and the twin's cabinet would fly off (README, "The
+        planning twin"). The full robot's arm would have met that part on the way,
+        where the twin has no arm; the twin then keeps the arm parked for the run, as
+        before its release."""
+        m, d = self.world.model, self.world.data
+        saved = np.empty(mujoco.mj_stateSize(m, SAVED_STATE))
+        mujoco.mj_getState(m, d, saved, SAVED_STATE)
+        try:
+            mujoco.mj_setState(m, d, start, ROLLOUT_STATE)
+            mujoco.mj_setState(m, d, row, CONTROL)
+            mujoco.mj_fwdPosition(m, d)
+            con = d.contact[: d.ncon]
+            arm = np.isin(m.geom_bodyid[con.geom1], self._arm_bodies) | np.isin(
+                m.geom_bodyid[con.geom2], self._arm_bodies
+            )
+            return bool(np.any(arm & (con.dist < -ARM_ENTRY_DEPTH)))
+        finally:
+            mujoco.mj_setState(m, d, saved, SAVED_STATE)
+
+    def _until_slid(self, states: np.ndarray, start: np.ndarray) -> np.ndarray:
+        """The recovery's rollout ``states`` (n, nstate) up to the first check (as in
+        :meth:`judge`) at which the cabinet has slid more than ``cabinet_motion_limit``
+        since ``start`` (all of them if it never does). The full robot's recovery is
+        monitored so (:meth:`~strug_manip.control.fetch_body.FullRobot._recover`): its
+        arm stops where it is. Unmonitored, a hand caught on a handle as it backs off
+        would drag the twin's cabinet on for the whole back-off, a drag no full robot
+        makes."""
+        a = 1 + self._cabinet_xy
+        every = self._check_every()
+        slid = self._slid(states, start[a : a + 2])
+        over = np.flatnonzero(cabinet_slid(slid[every - 1 :: every], self.params))
+        return states if not len(over) else states[: (int(over[0]) + 1) * every]
+
+    def _slid(self, states: np.ndarray, xy0: np.ndarray) -> np.ndarray:
+        """How far the cabinet stands from ``xy0`` (2,) in each rollout state, (n,) [m]."""
+        a = 1 + self._cabinet_xy
+        return np.linalg.norm(states[:, a : a + 2] - xy0, axis=1)
+
+    def _check_every(self) -> int:
+        """Steps between the monitors' checks: every
+        :data:`~.driver.MONITOR_PERIOD` (10 ms), as on the full robot."""
+        return max(1, round(MONITOR_PERIOD / self.world.model.opt.timestep))
+
+    def coast(self, start: np.ndarray, last: np.ndarray, budget: int) -> np.ndarray:
+        """The scene from rollout state ``start`` with the hand out of it and the arm
+        parked, the controls held at ``last`` (1, nu + 7 nmocap): :data:`COAST_TIME`,
+        then on in such spans while a cabinet joint still moves faster than
+        :data:`REST_SPEED`, up to ``budget`` steps in all (the rest of the full robot's
+        stow, during which its cabinet goes on settling); the states (n, nstate) from
+        ``start`` on, just ``start`` when the cabinet is at rest already (the hand,
+        clear of the cabinet by then, held nothing up)."""
+        m = self.world.model
+        span = max(1, round(COAST_TIME / m.opt.timestep))
+        dofs = 1 + m.nq + self._cabinet_dofs  # the cabinet's velocities in a state
+        out: list[np.ndarray] = [start[None]]
+        done = 0
+        self.ghost(True)
+        try:
+            while np.max(np.abs(start[dofs])) >= REST_SPEED and (done == 0 or done < budget):
+                tl, _ = rollout.rollout(m, self.world.data, start[None],
+                                        np.repeat(last, span, axis=0)[None],
+                                        control_spec=CONTROL)  # fmt: skip
+                out.append(tl[0])
+                done += span
+                start = tl[0][-1]
+        finally:
+            self.ghost(False)
+        return np.concatenate(out)
+
+    def ghost(self, on: bool) -> None:
+        """Take the hand out of (``on``) or back into the scene's collisions."""
+        m = self.world.model
+        for g in self._hand_geoms:
+            m.geom_contype[g] = 0 if on else self._hand_collide[g][0]
+            m.geom_conaffinity[g] = 0 if on else self._hand_collide[g][1]
