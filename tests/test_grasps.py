@@ -31,7 +31,8 @@ from strug_manip.control.grasps import (
 )
 from strug_manip.control.targets import CLEARANCE, FINGER_SPAN, HELD_HEIGHT
 from strug_manip.domains.manipulation.rules import DRAG_LIMIT, dragged, inside, open_enough
-from strug_manip.objects.generator import axis_angle, generate_cabinet
+from strug_manip.geometry import axis_angle
+from strug_manip.objects.generator import generate_cabinet
 from strug_manip.objects.hypotheses import check_pose
 from strug_manip.world.scene import OBJECT_HALF_SIZE
 

@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 from strug_manip.control import PullH, handle_grasps
-from strug_manip.objects.generator import axis_angle
+from strug_manip.geometry import axis_angle
 from strug_manip.world import ManipulationWorld, SceneConfig
 from strug_manip.world.sim import depth_to_points
 from strug_manip.world.views import aim_head

@@ -56,7 +56,7 @@ from strug_manip.control import ControlContext, OpenDoor, OpenDrawer, part_at
 from strug_manip.control.grasps import PITCHES
 from strug_manip.control.params import DEFAULT_PARAMS
 from strug_manip.experiments.seeds import evaluation_seeds
-from strug_manip.objects.generator import axis_angle
+from strug_manip.geometry import axis_angle
 from strug_manip.objects.hypotheses import BelievedJoint
 from strug_manip.world import ManipulationWorld, SceneConfig
 from strug_manip.world.views import take_views

@@ -35,6 +35,7 @@ import mujoco
 import numpy as np
 
 from planners.errors import ConfigError, UnknownNameError
+from strug_manip.geometry import quat_of
 from strug_manip.robot.fetch import GRIPPER_SITE
 
 #: Largest joint step between two checks along a joint-space segment [rad or m].
@@ -145,9 +146,7 @@ class ContactChecker:
         adr = int(m.jnt_qposadr[jnt])
         T = np.asarray(T_world_body, dtype=float)
         self.data.qpos[adr : adr + 3] = T[:3, 3]
-        mujoco.mju_mat2Quat(
-            self.data.qpos[adr + 3 : adr + 7], np.ascontiguousarray(T[:3, :3]).reshape(9)
-        )
+        self.data.qpos[adr + 3 : adr + 7] = quat_of(T[:3, :3])
         return self
 
     def get(self, joint: str) -> float:
@@ -234,9 +233,7 @@ class ContactChecker:
         T[:3, 3] = d.site_xpos[self._site]
         T = T @ T_gb
         d.qpos[adr : adr + 3] = T[:3, 3]
-        quat = np.empty(4)
-        mujoco.mju_mat2Quat(quat, np.ascontiguousarray(T[:3, :3]).reshape(9))
-        d.qpos[adr + 3 : adr + 7] = quat
+        d.qpos[adr + 3 : adr + 7] = quat_of(T[:3, :3])
         mujoco.mj_kinematics(m, d)
 
     def _collide(self, q: np.ndarray) -> int:

@@ -11,12 +11,12 @@ Tests inject a context with other solvers or options instead of patching modules
 from __future__ import annotations
 
 import weakref
-from collections import OrderedDict
 from collections.abc import Callable, Hashable
 from typing import TYPE_CHECKING, Any
 
 import mujoco
 
+from strug_manip.cache import LRU
 from strug_manip.control.contacts import ContactChecker
 from strug_manip.control.ik import FetchIK
 from strug_manip.control.motion import ArmMotionPlanner
@@ -58,10 +58,8 @@ class ControlContext:
         self.wb_ik = wb_ik or FetchIK(include_base=True, base_cost=BASE_COST, restarts=0)
         self.max_models = max_models
         self.max_placements = max_placements
-        self._per_model: OrderedDict[int, _Entry] = OrderedDict()
-        self._placements: OrderedDict[Hashable, Placement | SkillStop] = OrderedDict()
-        self.placement_hits = 0
-        self.placement_misses = 0
+        self._per_model = LRU(max_models)
+        self._placements = LRU(max_placements)
         #: Candidates that worked for recent plans (the planning twins' searches).
         self.hints = PlacementHints()
         # One token per planning world (placement keys), and what is derived from a
@@ -91,17 +89,14 @@ class ControlContext:
         self, model: mujoco.MjModel
     ) -> tuple[mujoco.MjModel, ArmMotionPlanner, ContactChecker]:
         key = id(model)
-        entry = self._per_model.get(key)
+        entry = self._per_model.lookup(key)
         if entry is None or entry[0] is not model:
             entry = (
                 model,
                 tuple(ArmMotionPlanner(model, planner=name) for name in PLANNERS),
                 ContactChecker(model, (*BASE_JOINTS, *ARM_TORSO_JOINTS)),
             )
-            self._per_model[key] = entry
-            while len(self._per_model) > self.max_models:
-                self._per_model.popitem(last=False)
-        self._per_model.move_to_end(key)
+            self._per_model.store(key, entry)
         return entry
 
     def planners(self, model: mujoco.MjModel) -> tuple[ArmMotionPlanner, ...]:
@@ -114,23 +109,25 @@ class ControlContext:
         whatever the last user loaded: load it before use)."""
         return self._entry(model)[2]
 
+    @property
+    def placement_hits(self) -> int:
+        """Placement lookups served from the cache."""
+        return self._placements.hits
+
+    @property
+    def placement_misses(self) -> int:
+        """Placement lookups that found nothing."""
+        return self._placements.misses
+
     def cached_placement(self, key: Hashable) -> Placement | SkillStop | None:
         """A placement found before for ``key`` (or the ``ik_infeasible`` stop of a
         search that found none), or None."""
-        found = self._placements.get(key)
-        if found is None:
-            self.placement_misses += 1
-            return None
-        self.placement_hits += 1
-        self._placements.move_to_end(key)
-        return found
+        return self._placements.lookup(key)
 
     def store_placement(self, key: Hashable, placement: Placement | SkillStop) -> None:
         """Keep ``placement`` (or the stop of a failed search) for ``key`` (oldest
         dropped beyond ``max_placements``)."""
-        self._placements[key] = placement
-        while len(self._placements) > self.max_placements:
-            self._placements.popitem(last=False)
+        self._placements.store(key, placement)
 
     def placement(self, key: Hashable, search: Callable[[], Placement]) -> Placement:
         """The placement cached for ``key``, else ``search()``'s (cached, as is the

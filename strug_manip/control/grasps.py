@@ -28,7 +28,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from strug_manip.objects.generator import PartSpec, axis_angle
+from strug_manip.geometry import axis_angle
+from strug_manip.objects.generator import PartSpec
 
 #: Pitch angles of the candidate grasps after the level one [rad] (positive: the
 #: approach tilted down).

@@ -58,6 +58,7 @@ from strug_manip.control.ik_limits import (
     limit_bounds,
 )
 from strug_manip.control.ik_qp import ReducedQP, damping_costs
+from strug_manip.geometry import rotation_angle
 from strug_manip.objects.hypotheses import check_pose
 from strug_manip.robot.fetch import (
     ALL_JOINTS,
@@ -160,14 +161,6 @@ def body_geoms(model: mujoco.MjModel, bodies: Sequence[str]) -> list[int]:
             raise UnknownNameError("body", b, names)
         out.extend(int(g) for g in np.flatnonzero(model.geom_bodyid == model.body(b).id))
     return out
-
-
-def _rotation_angle(R: np.ndarray) -> float:
-    """Angle [rad] of a rotation matrix (3, 3), accurate near 0."""
-    quat = np.empty(4)
-    mujoco.mju_mat2Quat(quat, np.ascontiguousarray(R, dtype=float).reshape(9))
-    v = quat[1:]
-    return 2.0 * math.atan2(math.sqrt(v.dot(v)), abs(float(quat[0])))  # = np.linalg.norm
 
 
 class FetchIK:
@@ -312,7 +305,7 @@ class FetchIK:
         d = self._config.data
         e = p_goal - d.site_xpos[self._site]
         R = d.site_xmat[self._site].reshape(3, 3)
-        return math.sqrt(e.dot(e)), _rotation_angle(R_goal.T @ R)  # |e| as np.linalg.norm
+        return math.sqrt(e.dot(e)), rotation_angle(R_goal.T @ R)  # |e| as np.linalg.norm
 
     def _clearance(self) -> float:
         """Smallest distance [m] between the geoms of the collision pairs at the current

@@ -24,8 +24,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from strug_manip.objects.generator import axis_angle
-
 
 @dataclass(frozen=True, eq=False)
 class Line:
@@ -158,16 +156,6 @@ def along(
 def line_of(name: str, poses: tuple[np.ndarray, float], speed: float, **kw: object) -> Line:
     """A :class:`Line` from ``(poses, length)`` (as :func:`straight` returns)."""
     return Line(name, poses[0], poses[1], speed, **kw)  # type: ignore[arg-type]
-
-
-def rotate_about(T: np.ndarray, axis: np.ndarray, origin: np.ndarray, angle: float) -> np.ndarray:
-    """``T`` (4, 4) rotated by ``angle`` [rad] about the line through ``origin`` (3,)
-    along unit ``axis`` (3,)."""
-    R = axis_angle(axis, angle)
-    out = T.copy()
-    out[:3, :3] = R @ T[:3, :3]
-    out[:3, 3] = origin + R @ (T[:3, 3] - origin)
-    return out
 
 
 def retreat_poses(T: np.ndarray, distance: float, step: float) -> tuple[np.ndarray, float]:

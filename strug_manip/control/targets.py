@@ -28,7 +28,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from planners.errors import ConfigError
-from strug_manip.objects.generator import CabinetSpec, PartSpec, axis_angle
+from strug_manip.geometry import axis_angle
+from strug_manip.objects.generator import CabinetSpec, PartSpec
 from strug_manip.world.scene import OBJECT_HALF_SIZE
 
 #: Span of the fully opened fingers, outer faces [m] (2 x (0.05 travel + 0.0149)).

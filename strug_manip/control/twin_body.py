@@ -62,13 +62,13 @@ from __future__ import annotations
 import dataclasses
 import time
 import weakref
-from collections import OrderedDict
 
 import mujoco
 import numpy as np
 from mujoco import rollout
 
 from planners.errors import ConfigError
+from strug_manip.cache import LRU
 from strug_manip.control.base_servo import BaseServo
 from strug_manip.control.contacts import HAND_BODIES
 from strug_manip.control.context import ControlContext
@@ -77,9 +77,10 @@ from strug_manip.control.outcome import Outcome, SkillStop, Status
 from strug_manip.control.params import DEFAULT_PARAMS, SkillParams
 from strug_manip.control.placement import Placement, find_placement, work_frame
 from strug_manip.control.plan import SkillPlan
-from strug_manip.control.twin_program import BASE_SPEED, Program, TwinPrograms
+from strug_manip.control.twin_program import BASE_SPEED, PROGRAMS, Program, TwinPrograms
 from strug_manip.control.twin_rollout import CONTROL, ROLLOUT_STATE, TCP_OFFSET, TwinRollout
 from strug_manip.control.twin_servo import arm_servo
+from strug_manip.geometry import quat_of
 from strug_manip.objects.generator import CabinetSpec
 from strug_manip.robot.fetch import (
     BASE_JOINTS,
@@ -153,7 +154,7 @@ class PlanningTwin(TwinPrograms, TwinRollout):
         self.params = params
         self.checked = bool(checked)
         self._planning_world: ManipulationWorld | None = None
-        self._programs: OrderedDict[tuple[Placement, object], Program] = OrderedDict()
+        self._programs = LRU(PROGRAMS)
         # What the twin derives from each placement (servos, base response, arm and
         # stow paths), dropped with the placement (:meth:`_of`).
         self._derived: weakref.WeakKeyDictionary[Placement, dict] = weakref.WeakKeyDictionary()
@@ -313,9 +314,7 @@ class PlanningTwin(TwinPrograms, TwinRollout):
         if plan.carrying is not None:
             T_wo = prog.start @ plan.carrying[1]
             d.qpos[self._obj_adr : self._obj_adr + 3] = T_wo[:3, 3]
-            q = np.empty(4)
-            mujoco.mju_mat2Quat(q, np.ascontiguousarray(T_wo[:3, :3]).reshape(9))
-            d.qpos[self._obj_adr + 3 : self._obj_adr + 7] = q
+            d.qpos[self._obj_adr + 3 : self._obj_adr + 7] = quat_of(T_wo[:3, :3])
             d.qvel[m.jnt_dofadr[m.joint("object/free").id] :][:6] = 0.0
             # The fingers as the grasp left them: against the box's 0.06 m sides.
             for a in self._fingers:
@@ -331,8 +330,7 @@ class PlanningTwin(TwinPrograms, TwinRollout):
         """Put the hand (its TCP) at ``T`` (4, 4), at rest, its servo targets there."""
         d = self.world.data
         origin = T[:3, 3] - TCP_OFFSET * T[:3, 0]
-        q = np.empty(4)
-        mujoco.mju_mat2Quat(q, np.ascontiguousarray(T[:3, :3]).reshape(9))
+        q = quat_of(T[:3, :3])
         d.qpos[self._slide_adr] = origin
         d.qpos[self._ball_adr : self._ball_adr + 4] = q
         d.qvel[self._slide_dof] = 0.0

@@ -19,7 +19,7 @@ from strug_manip.control.executor import STOW_SEED, ends_holding, plan_stow, sto
 from strug_manip.control.outcome import SkillStop
 from strug_manip.control.placement import Placement
 from strug_manip.control.plan import Grip, Line, SkillPlan
-from strug_manip.control.rotations import quats, slerp, with_base
+from strug_manip.geometry import quats, slerp, with_base
 from strug_manip.robot.fetch import ARM_TORSO_JOINTS, BASE_JOINTS, GRIPPER_OPEN, GRIPPER_SQUEEZE
 from strug_manip.world.floating_gripper import ARM_LINKS, ARM_PARK
 from strug_manip.world.sim import ManipulationWorld
@@ -162,12 +162,10 @@ class TwinPrograms:
         placement = self._placement(plan, plan_world)
         pw = plan_world if plan_world is not None or not self.checked else self._planning_world
         key = (placement, self._token(pw))  # (_placement made the twin's own world)
-        prog = self._programs.pop(key, None)
+        prog = self._programs.lookup(key)
         if prog is None:
             prog = self._program(placement, plan_world)
-        self._programs[key] = prog
-        while len(self._programs) > PROGRAMS:
-            self._programs.popitem(last=False)
+            self._programs.store(key, prog)
         return prog
 
     def _program(self, placement: Placement, plan_world: ManipulationWorld | None) -> Program:

@@ -21,8 +21,8 @@ from strug_manip.control.executor import (
     stop_detail,
 )
 from strug_manip.control.outcome import Status
-from strug_manip.control.rotations import x_axes
 from strug_manip.control.twin_program import COAST_TIME, Program
+from strug_manip.geometry import x_axes
 from strug_manip.robot.fetch import GRIPPER_OPEN, GRIPPER_SQUEEZE
 from strug_manip.world.floating_gripper import ARM_PARK
 
@@ -74,8 +74,7 @@ class TwinRollout:
         dt = m.opt.timestep
         qpos = state[1 : 1 + m.nq]
         quat = qpos[self._ball_adr : self._ball_adr + 4].copy()
-        T = np.eye(4)
-        mujoco.mju_quat2Mat(T[:3, :3].reshape(9), quat)
+        T = np.eye(4)  # (the hand's rotation is not read: see the fix that follows)
         T[:3, 3] = qpos[self._slide_adr] + TCP_OFFSET * T[:3, 0]
         fingers = 0.5 * (qpos[self._fingers[0]] + qpos[self._fingers[1]])
         keep = keeps_object(prog.plan, self.grip_cmd_at_stop, fingers)

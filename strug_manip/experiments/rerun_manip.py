@@ -34,6 +34,7 @@ import pyarrow as pa
 import rerun as rr
 
 from planners.errors import ConfigError, check_positive_int
+from strug_manip.geometry import mat_of
 from strug_manip.world.sim import MAX_DEPTH  # background depths: logged as 0, "no depth"
 
 if TYPE_CHECKING:
@@ -99,9 +100,7 @@ def _geom_archetype(m: mujoco.MjModel, g: int, rgba: np.ndarray) -> rr.AsCompone
     T = mujoco.mjtGeom
     kind, size = int(m.geom_type[g]), m.geom_size[g]
     pos, wxyz = m.geom_pos[g], m.geom_quat[g]
-    R = np.empty(9)
-    mujoco.mju_quat2Mat(R, wxyz)
-    R = R.reshape(3, 3)
+    R = mat_of(wxyz)
     q = [_xyzw(wxyz)]
     if kind == T.mjGEOM_BOX:
         return rr.Boxes3D(

@@ -104,6 +104,7 @@ from typing import Literal
 import numpy as np
 
 from planners.errors import ConfigError, UnknownNameError
+from strug_manip.geometry import axis_angle
 
 PartKind = Literal["drawer", "door", "shelf", "panel"]
 HandleKind = Literal["bar", "knob", "none"]
@@ -422,14 +423,6 @@ class CabinetSpec:
             if p.link == link:
                 return p
         raise UnknownNameError("part link", link, [p.link for p in self.parts])
-
-
-def axis_angle(axis: np.ndarray, angle: float) -> np.ndarray:
-    """Rotation matrix of ``angle`` [rad] about the unit ``axis`` (3,), shape (3, 3)."""
-    x, y, z = axis
-    c, s = math.cos(angle), math.sin(angle)
-    K = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
-    return np.eye(3) + s * K + (1 - c) * K @ K
 
 
 def _uniform(rng: np.random.Generator, bounds: tuple[float, float]) -> float:

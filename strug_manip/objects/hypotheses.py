@@ -18,7 +18,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from planners.errors import ConfigError, UnknownNameError
-from strug_manip.objects.generator import CabinetSpec, PartSpec, axis_angle
+from strug_manip.geometry import axis_angle
+from strug_manip.objects.generator import CabinetSpec, PartSpec
 
 #: Tolerances of :func:`check_pose`, as ``np.allclose`` reads them (``atol + 1e-5 *
 #: |expected|``): the last row to 1e-9, ``R^T R`` to the identity to 1e-6.

@@ -41,6 +41,7 @@ import mujoco
 import numpy as np
 
 from planners.errors import ConfigError
+from strug_manip.geometry import quat_of
 from strug_manip.objects.urdf import GeometryInfo, LinkInfo, ParsedUrdf
 
 SHELL_DENSITY = 6.0  # [kg/m^2] surface density of links without <inertial>
@@ -53,13 +54,6 @@ FLOOR_SIZE = 5.0  # [m] half-size of the standalone floor plane
 LIMIT_SOLREF = (0.004, 1.0)
 #: Joint-limit impedance (d0, dwidth, width [m or rad], midpoint, power): near-rigid.
 LIMIT_SOLIMP = (0.99, 0.999, 0.001, 0.5, 2.0)
-
-
-def quat_of(R: np.ndarray) -> np.ndarray:
-    """Rotation matrix (3, 3) -> MuJoCo quaternion (w, x, y, z), (4,)."""
-    q = np.zeros(4)
-    mujoco.mju_mat2Quat(q, np.ascontiguousarray(R, dtype=float).ravel())
-    return q
 
 
 def _valid_inertia(J: np.ndarray) -> np.ndarray:

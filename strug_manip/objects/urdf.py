@@ -24,6 +24,7 @@ from typing import TypeVar
 import numpy as np
 
 from planners.errors import ConfigError
+from strug_manip.geometry import rpy_matrix
 
 URDF_NAME = "mobility.urdf"
 SEMANTICS_NAME = "semantics.txt"
@@ -143,26 +144,6 @@ class JointInfo:
         return self.type != "fixed"
 
 
-def _rpy_matrix(rpy: Sequence[float]) -> np.ndarray:
-    """URDF fixed-axis roll-pitch-yaw [rad] -> rotation matrix Rz(y) Ry(p) Rx(r), (3, 3)."""
-    r, p, y = rpy
-    cr, sr, cp, sp, cy, sy = (
-        math.cos(r),
-        math.sin(r),
-        math.cos(p),
-        math.sin(p),
-        math.cos(y),
-        math.sin(y),
-    )
-    return np.array(
-        [
-            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
-            [-sp, cp * sr, cp * cr],
-        ]
-    )
-
-
 T = TypeVar("T")
 
 
@@ -218,7 +199,7 @@ class _Parser:
             return T
         xyz = self.floats(elem.get("xyz"), 3, f"{what} <origin xyz>", (0, 0, 0))
         rpy = self.floats(elem.get("rpy"), 3, f"{what} <origin rpy>", (0, 0, 0))
-        T[:3, :3] = _rpy_matrix(rpy)
+        T[:3, :3] = rpy_matrix(rpy)
         T[:3, 3] = xyz
         return T
 

@@ -22,6 +22,7 @@ import mujoco
 import numpy as np
 
 from planners.errors import ConfigError, UnknownNameError
+from strug_manip.geometry import quat_of
 from strug_manip.objects import CabinetSpec
 from strug_manip.robot.fetch import GRIPPER_OPEN
 from strug_manip.world.floating_gripper import PARK, SLIDES
@@ -399,7 +400,7 @@ class ManipulationWorld:
         a, v = m.jnt_qposadr[j], m.jnt_dofadr[j]
         T = np.asarray(T, dtype=float)
         d.qpos[a : a + 3] = T[:3, 3]
-        mujoco.mju_mat2Quat(d.qpos[a + 3 : a + 7], np.ascontiguousarray(T[:3, :3]).reshape(9))
+        d.qpos[a + 3 : a + 7] = quat_of(T[:3, :3])
         d.qvel[v : v + 6] = 0.0
         mujoco.mj_kinematics(m, d)
 
