@@ -12,6 +12,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 import pytest
+from fetch_pinocchio import FetchKinematics
 
 from planners.errors import ConfigError, PlannersError
 from strug_manip.robot import (
@@ -29,7 +30,6 @@ from strug_manip.robot import (
     HEAD_JOINTS,
     HOME_KEYFRAME,
     TORSO_JOINT,
-    FetchKinematics,
 )
 
 SIM_SECONDS = 2.0

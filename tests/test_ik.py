@@ -7,11 +7,12 @@ import math
 import mujoco
 import numpy as np
 import pytest
+from fetch_pinocchio import FetchKinematics
 
 from planners.errors import ConfigError, PlannersError, UnknownNameError
 from strug_manip.control.ik import FetchIK, IKResult, body_geoms
 from strug_manip.robot.fetch import ARM_TORSO_JOINTS as IK_JOINTS
-from strug_manip.robot.fetch import BASE_JOINTS, FETCH_XML, FetchKinematics
+from strug_manip.robot.fetch import BASE_JOINTS, FETCH_XML
 
 N_POSES = 100
 POS_TOL = 1e-3  # [m]

@@ -1,4 +1,4 @@
-"""The robot: Fetch's model files, joint names and kinematics (Pinocchio).
+"""The robot: Fetch's model files and joint names (its kinematics: MuJoCo's, in IK).
 
 See :mod:`strug_manip.robot.fetch`.
 """
@@ -18,7 +18,6 @@ from strug_manip.robot.fetch import (
     HEAD_JOINTS,
     HOME_KEYFRAME,
     TORSO_JOINT,
-    FetchKinematics,
 )
 
 __all__ = [
@@ -36,5 +35,4 @@ __all__ = [
     "HEAD_JOINTS",
     "HOME_KEYFRAME",
     "TORSO_JOINT",
-    "FetchKinematics",
 ]
