@@ -4,12 +4,14 @@ Plan in any generative POMDP: subclass :class:`planners.pomdp.GenerativePOMDP` (
 class attributes; ``step(s, a, rng)``, ``obs_loglik``, ``action_space``,
 ``sample_initial_state``), build a solver config (``POMCPOWConfig(sims=2000)``), then
 either ``config.planner(pomdp).act(belief, rng) -> (action, SearchInfo)`` per decision
-or ``run_episode(pomdp, config, seed) -> EpisodeResult`` for a whole simulated
-episode. Every error raised on bad input is a :class:`PlannersError`.
+or ``run_episode(model, environment, config, seed) -> EpisodeResult`` for a whole
+episode (``run_episode(pomdp, config, seed)`` simulates the true state with the
+model). Every error raised on bad input is a :class:`PlannersError`.
 This package never imports mujoco, torch or ``strug_manip``.
 """
 
 from planners.belief import ParticleBelief, UpdateInfo, update_belief
+from planners.environment import Environment, Executed, SimulatedEnvironment
 from planners.episode import (
     DEFAULT_PARTICLES,
     EpisodeResult,
@@ -59,7 +61,9 @@ __all__ = [
     "BeliefTreeConfig",
     "ConfigError",
     "EntropyConfig",
+    "Environment",
     "EpisodeResult",
+    "Executed",
     "GenerativePOMDP",
     "HybridAction",
     "ModelError",
@@ -72,6 +76,7 @@ __all__ = [
     "RolloutPolicy",
     "STRUGConfig",
     "SearchInfo",
+    "SimulatedEnvironment",
     "SolverConfig",
     "Step",
     "StepRecord",

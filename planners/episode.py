@@ -1,14 +1,15 @@
-"""One episode of any :class:`GenerativePOMDP`: a true state, a particle belief, a
-planner, and the world stepping (:func:`run_episode`).
+"""One episode of any :class:`GenerativePOMDP` planned in a model and executed in an
+:class:`~planners.environment.Environment` (:func:`run_episode`).
 
-The loop: draw the true initial state and an ``n_particles`` belief from b0; then, per
-step, ``planner.act(belief, rng)``, step the true state with the chosen action, update
-the belief with the real observation (:func:`planners.belief.update_belief`), condition it on what
-the domain knows for certain (``pomdp.condition``) and report
-the step to the planner (``observe``), until ``done`` or the domain's ``max_steps``.
+The loop: reset the environment (the true initial state) and draw an ``n_particles``
+belief from the model's b0, conditioned by the environment; then, per step,
+``planner.act(belief, rng)``, ``environment.execute`` the chosen action, update the
+belief with the observation (:func:`planners.belief.update_belief`), condition it on
+what the environment knows for certain (``environment.condition``) and report the step
+to the planner (``observe``), until ``done`` or the model's ``max_steps``.
 
 Randomness: ``seed`` feeds one ``SeedSequence`` split into three independent
-generators (the world: true initial state and transitions; the belief updates; the
+generators (the world: the environment's reset and execution; the belief updates; the
 planner), so different solvers with the same seed face the same true initial state
 and the same initial belief. With a simulation budget the same seed gives the same
 episode bit for bit; a wall-time budget (``time_limit``) does not.
@@ -24,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from planners.belief import update_belief
+from planners.environment import Environment, environment_for
 from planners.errors import check_positive_int
 from planners.pomdp import GenerativePOMDP, check_pomdp
 from planners.solvers.base import SolverConfig
@@ -107,18 +109,28 @@ def episode_generators(seed: int) -> tuple[np.random.Generator, ...]:
 
 
 def run_episode(
-    pomdp: GenerativePOMDP,
-    solver: SolverConfig,
-    seed: int,
+    model: GenerativePOMDP,
+    environment: Environment | Any,
+    solver: SolverConfig | int | None = None,
+    seed: int | None = None,
     *,
     n_particles: int = DEFAULT_PARTICLES,
     on_step: Callable[[StepRecord], None] | None = None,
     recorder: Callable[[StepRecord, Any, Any], None] | None = None,
 ) -> EpisodeResult:
-    """Run one episode of ``solver`` on ``pomdp`` until ``done`` or ``max_steps``.
+    """Run one episode of ``solver`` planning in ``model`` while ``environment`` acts,
+    until ``done`` or the model's ``max_steps``: act -> execute -> update the belief ->
+    condition it.
+
+    The convenience form ``run_episode(model, solver, seed)`` (no environment) runs in
+    the environment the model comes with (:func:`planners.environment.environment_for`:
+    a :class:`~planners.environment.SimulatedEnvironment` of the model, or the
+    manipulation tasks' real robot).
 
     Args:
-        pomdp: the domain (validated with :func:`planners.pomdp.check_pomdp`).
+        model: the domain the planner simulates (validated with
+            :func:`planners.pomdp.check_pomdp`).
+        environment: what executes the actions (:class:`~planners.environment.Environment`).
         solver: the solver config (built into a planner here).
         seed: the episode seed (>= 0).
         n_particles: belief size.
@@ -127,47 +139,52 @@ def run_episode(
             state after the step)``, e.g. a rerun recorder.
 
     Returns:
-        The :class:`EpisodeResult`: discounted return (the domain's discount), the step
-        records and the true trajectory.
+        The :class:`EpisodeResult`: discounted return (the model's discount), the step
+        records and the true trajectory (the environment's ``state`` after every step).
 
     Raises:
-        ModelError: ``pomdp`` lacks a class attribute or returns a malformed action space.
+        ModelError: ``model`` lacks a class attribute or returns a malformed action space.
         ConfigError: ``seed`` or ``n_particles`` is not a valid count.
     """
+    if not isinstance(environment, Environment):  # run_episode(model, solver, seed)
+        solver, seed = environment, seed if seed is not None else solver
+        environment = environment_for(model)
     check_positive_int("n_particles", n_particles)
-    check_pomdp(pomdp)
-    world_rng, belief_rng, plan_rng = episode_generators(seed)
+    check_pomdp(model)
+    world_rng, belief_rng, plan_rng = episode_generators(seed)  # type: ignore[arg-type]
     t0 = time.perf_counter()
-    state = pomdp.sample_initial_state(world_rng)
-    belief = pomdp.condition(pomdp.initial_belief(belief_rng, n_particles))
-    planner = solver.planner(pomdp)
+    environment.reset(world_rng)
+    state = environment.state
+    belief = environment.condition(model.initial_belief(belief_rng, n_particles))
+    planner = solver.planner(model)  # type: ignore[union-attr]
     observe = getattr(planner, "observe", None)
-    names = pomdp.action_space().name
+    names = model.action_space().name
     total, disc = 0.0, 1.0
     records: list[StepRecord] = []
     trajectory = [state]
     initial = repr(state)
-    for t in range(pomdp.max_steps):
+    for t in range(model.max_steps):
         action, info = planner.act(belief, plan_rng)
-        state_next, obs, reward, done = pomdp.step(state, action, world_rng)
+        obs, reward, done = environment.execute(action, world_rng)
+        state_next = environment.state
         total += disc * reward
-        disc *= pomdp.discount
+        disc *= model.discount
         if not done:
             belief, _ = update_belief(
-                pomdp, belief, action, obs, belief_rng, resample_ess=pomdp.resample_ess
+                model, belief, action, obs, belief_rng, resample_ess=model.resample_ess
             )
-            belief = pomdp.condition(belief)
+            belief = environment.condition(belief)
             if observe is not None:
                 observe(action, obs)  # lets a planner keep its tree (reuse_tree)
         rec = StepRecord(
             step=t,
             action=names(action),
-            observation=pomdp.format_obs(obs),
+            observation=model.format_obs(obs),
             reward=float(reward),
             sims=info.sims,
             plan_seconds=info.seconds,
             tree_nodes=info.tree_nodes,
-            belief="(episode over)" if done else pomdp.summarize_belief(belief),
+            belief="(episode over)" if done else model.summarize_belief(belief),
             q={names(a): float(v) for a, v in zip(info.actions, info.q, strict=True)},
             visits={names(a): int(v) for a, v in zip(info.actions, info.visits, strict=True)},
             bonus={
@@ -177,7 +194,7 @@ def run_episode(
             tru=_optional_float(info.extra.get("tru")),
             entropy=_optional_float(info.extra.get("entropy")),
             phase=info.extra.get("phase"),
-            state=pomdp.format_state(state),
+            state=model.format_state(state),
         )
         records.append(rec)
         trajectory.append(state_next)

@@ -359,12 +359,12 @@ class GenerativePOMDP(ABC):
         return None
 
     def condition(self, belief: ParticleBelief) -> ParticleBelief:
-        """The runner's belief, after it is made and after every update, given what the
-        domain knows for certain of the real state (default: ``belief`` unchanged).
-
-        The manipulation tasks put the robot's and the cabinet's known poses into every
-        particle here, and keep the belief: their real robot plans against its
-        likeliest models."""
+        """The belief, after it is made and after every update, given what the domain
+        knows for certain of the true state (default: ``belief`` unchanged): what a
+        :class:`~planners.environment.SimulatedEnvironment` of this model conditions
+        with. An environment of its own conditions in its ``condition`` (the
+        manipulation tasks' real robot puts its and the cabinet's known poses into every
+        particle there)."""
         return belief
 
     def rollout_policy(self) -> RolloutPolicy | None:

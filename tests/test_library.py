@@ -146,6 +146,43 @@ def test_every_solver_plans_with_numpy_observations(toy: type, solver: str) -> N
     assert first.discounted_return == again.discounted_return
 
 
+def test_an_episode_runs_in_any_environment() -> None:
+    """``run_episode(model, environment, solver, seed)``: a simulated environment gives
+    the convenience form's episode; a user's own environment executes every action the
+    planner chose, and its ``condition`` sees the initial belief and every update."""
+    from planners import Environment, Executed, SimulatedEnvironment
+
+    pomdp = ArrayTiger()
+    config = make_solver("pomcp", {"sims": BUDGET})
+    named = run_episode(pomdp, SimulatedEnvironment(pomdp), config, 3, n_particles=100)
+    short = run_episode(pomdp, config, 3, n_particles=100)
+    assert [s.action for s in named.steps] == [s.action for s in short.steps]
+    assert named.discounted_return == short.discounted_return
+
+    class Robot:  # a tiger always behind the left door, and a log of what it did
+        def __init__(self) -> None:
+            self.state, self.done, self.conditioned = None, [], 0
+
+        def reset(self, rng: np.random.Generator) -> None:
+            self.state = 0
+
+        def execute(self, action: Any, rng: np.random.Generator) -> Executed:
+            _, o, r, done = pomdp.step(self.state, action, rng)
+            self.done.append(action)
+            return Executed(o, r, done)
+
+        def condition(self, belief: Any) -> Any:
+            self.conditioned += 1
+            return belief
+
+    robot = Robot()
+    assert isinstance(robot, Environment)
+    result = run_episode(pomdp, robot, config, 3, n_particles=100)
+    assert len(robot.done) == len(result.steps)
+    assert robot.conditioned == len(result.steps) + (0 if result.steps[-1].belief.startswith(
+        "(episode over)") else 1)  # fmt: skip
+
+
 def test_observation_keys() -> None:
     pomdp = ArrayTiger()
     assert pomdp.observation_key(np.array([1.5, -2.0])) == (1.5, -2.0)

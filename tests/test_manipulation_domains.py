@@ -12,15 +12,15 @@ import pytest
 
 from planners.belief import ParticleBelief
 from planners.errors import ConfigError, UnknownNameError
+from planners.pomdp import Step
 from planners.solvers import SOLVERS, make_solver
 from strug_manip.domains import MANIPULATION_DOMAINS, make_domain
+from strug_manip.domains.manipulation import episode_setup
 from strug_manip.domains.manipulation.actions import SAME_PART, TABLE, ManipAction, part_kind
-from strug_manip.domains.manipulation.model import (
-    BEFORE_MOTION,
-    REAL,
-    REAL_PLAN_MODELS,
-    REPEATS_ITSELF,
-)
+from strug_manip.domains.manipulation.catalogue import representatives
+from strug_manip.domains.manipulation.grounding import handle_point
+from strug_manip.domains.manipulation.real import REAL_PLAN_MODELS
+from strug_manip.domains.manipulation.rules import BEFORE_MOTION, REPEATS_ITSELF
 from strug_manip.domains.manipulation.state import (
     ManipObservation,
     ManipState,
@@ -42,6 +42,24 @@ def _top_point(domain) -> np.ndarray:
     return (T @ np.r_[part.cell_center, 1.0])[:3]
 
 
+def _start(d, rng: np.random.Generator) -> ManipState:
+    """A new real episode of task ``d`` (its environment reset): the real state."""
+    d.environment.reset(rng)
+    return d.environment.state
+
+
+def _real_step(d, s: ManipState, a: ManipAction, rng: np.random.Generator) -> Step:
+    """``a`` on the real robot from real state ``s`` (the environment put there)."""
+    env = d.environment
+    env.state = s
+    obs, reward, done = env.execute(a, rng)
+    return Step(env.state, obs, reward, done)
+
+
+def _with_reps(d, reps) -> None:
+    d.root = dataclasses.replace(d.root, reps=reps)
+
+
 def test_bad_input_gets_one_clear_error():
     with pytest.raises(UnknownNameError, match="probe"):
         make_domain("opendrawer", probes=("Shake",))
@@ -51,7 +69,7 @@ def test_bad_input_gets_one_clear_error():
         make_domain("opendrawer", target=(1.0, 2.0))
     d = make_domain("opendrawer", cabinet_seed=SEED, target=(0.0, 5.0, 9.0))
     with pytest.raises(ConfigError, match=r"is on no drawer part of cabinet_0011 \(its cells"):
-        d.sample_initial_state(np.random.default_rng(0))
+        _start(d, np.random.default_rng(0))
     with pytest.raises(ConfigError, match="no episode yet"):
         make_domain("opendoor").initial_belief(np.random.default_rng(0), 4)
 
@@ -61,12 +79,12 @@ def drawer_episode():
     """An OpenDrawer episode's domain after its initial belief (target given: no
     full-robot check of the target)."""
     probe = make_domain("opendrawer", cabinet_seed=SEED, particles=8)
-    probe.sample_initial_state(np.random.default_rng(0))
+    _start(probe, np.random.default_rng(0))
     point = _top_point(probe)
     probe.close()
     d = make_domain("opendrawer", cabinet_seed=SEED, particles=8, target=tuple(point))
-    s0 = d.sample_initial_state(np.random.default_rng(0))
-    belief = d.initial_belief(np.random.default_rng(1), 8)
+    s0 = _start(d, np.random.default_rng(0))
+    belief = d.environment.condition(d.initial_belief(np.random.default_rng(1), 8))
     yield d, s0, belief
     d.close()
 
@@ -76,9 +94,9 @@ def test_initial_belief_holds_the_true_target_model(drawer_episode):
     spec = d.real.world.scene.cabinet_spec
     true = model_of(spec.part(d.real.target))
     held = {
-        part_kind(d.worlds.particles[s.origin].spec.part(d.targets[s.origin]))
+        part_kind(d.worlds.particles[s.origin].spec.part(d.cat.targets[s.origin]))
         for s in belief.states
-        if d.targets[s.origin] is not None
+        if d.cat.targets[s.origin] is not None
     }
     assert true in held, f"the target is a {true}; the particles hold {held}"
 
@@ -164,13 +182,13 @@ def test_open_cell_is_read_off_the_boards_and_walls_front_edges():
 def test_the_belief_takes_over_what_the_robot_knows_after_a_real_step(drawer_episode):
     d, s0, belief = drawer_episode
     rng = np.random.default_rng(0)
-    real = d.step(s0, ManipAction("Pick", grasp="top"), rng)
+    real = _real_step(d, s0, ManipAction("Pick", grasp="top"), rng)
     moved = [d.step(s, ManipAction("Pick", grasp="top"), rng).state for s in belief.states]
     d.real.world.restore(real.state.sim)
     shift = np.eye(4)
     shift[:3, 3] = [0.03, -0.02, 0.0]  # as if the real cabinet had been dragged
     d.real.world.set_cabinet_pose(shift @ d.real.world.cabinet_pose())
-    conditioned = d.condition(type(belief)(moved, belief.weights, belief.origin))
+    conditioned = d.environment.condition(type(belief)(moved, belief.weights, belief.origin))
     rw = d.real.world
     moved = rw.cabinet_pose() @ np.linalg.inv(rw.scene.T_world_cabinet)
     assert np.linalg.norm(moved[:2, 3]) > 0.03
@@ -191,7 +209,7 @@ def test_a_part_the_real_robot_sees_shut_is_shut_in_every_particle(drawer_episod
     camera shows a front flush, not which way an open part opens)."""
     d, s0, belief = drawer_episode
     rng = np.random.default_rng(0)
-    real = d.step(s0, ManipAction("Pick", grasp="top"), rng)
+    real = _real_step(d, s0, ManipAction("Pick", grasp="top"), rng)
     moved = [d.step(s, ManipAction("Pick", grasp="top"), rng).state for s in belief.states]
     opened = []
     for s in moved:
@@ -201,13 +219,13 @@ def test_a_part_the_real_robot_sees_shut_is_shut_in_every_particle(drawer_episod
         opened.append(ManipState(s.origin, tw.snapshot(), s.t, s.last))
     rw = d.real.world
     rw.restore(real.state.sim)
-    links = {k: d._real_link(k, within=SAME_PART) for k in range(len(d.parts))}
+    links = {k: d.environment.real_link(k, within=SAME_PART) for k in range(len(d.parts))}
     links = {k: v for k, v in links.items() if v is not None}
     assert len(set(links.values())) >= 2, links
     left_open = next(iter(links.values()))
     rw.set_parts({rw.scene.cabinet_spec.part(left_open).joint: 0.1})
     try:
-        conditioned = d.condition(type(belief)(opened, belief.weights, belief.origin))
+        conditioned = d.environment.condition(type(belief)(opened, belief.weights, belief.origin))
         for s in conditioned.states:
             tw = d.worlds.twins[s.origin]
             tw.restore(s.sim)
@@ -221,7 +239,7 @@ def test_a_part_the_real_robot_sees_shut_is_shut_in_every_particle(drawer_episod
                 assert q == pytest.approx(p.upper if link == left_open else 0.0), (k, own)
     finally:
         rw.restore(s0.sim)
-        d.condition(belief)
+        d.environment.condition(belief)
 
 
 def _standing_front(z: float, depth: float = 0.4) -> np.ndarray:
@@ -317,20 +335,20 @@ def test_a_drawn_cabinet_without_a_target_gives_way_to_the_next_draw(monkeypatch
     def first_has_none(d):
         calls = []
 
-        def choose(world, rng):
+        def choose(world, *args):
             calls.append(world.config.cabinet_seed)
             if len(calls) == 1:
                 raise ConfigError("no part the robot can open")
             return "link_1", np.zeros(3)
 
-        monkeypatch.setattr(d, "_choose_target", choose)
+        monkeypatch.setattr(episode_setup, "choose_target", choose)
         return calls
 
     drawn = []
     for _ in range(2):
         d = make_domain("opendrawer")
         calls = first_has_none(d)
-        d.sample_initial_state(np.random.default_rng(5))
+        _start(d, np.random.default_rng(5))
         assert len(calls) == 2 and d.real.seed == calls[1]
         drawn.append(calls)
         d.close()
@@ -338,7 +356,7 @@ def test_a_drawn_cabinet_without_a_target_gives_way_to_the_next_draw(monkeypatch
     chosen = make_domain("opendrawer", cabinet_seed=SEED)
     first_has_none(chosen)
     with pytest.raises(ConfigError, match="no part"):
-        chosen.sample_initial_state(np.random.default_rng(5))
+        _start(chosen, np.random.default_rng(5))
 
 
 def test_a_believed_flap_has_a_friction_stay_and_stays_shut():
@@ -391,8 +409,8 @@ def test_a_cloud_of_an_unchanged_cabinet_is_weighed_once(drawer_episode):
     pick = ManipAction("Pick", grasp="top")
     try:
         d.real.weighed = b""
-        first = d.step(s0, pick, rng)
-        again = d.step(first.state, pick, rng)
+        first = _real_step(d, s0, pick, rng)
+        again = _real_step(d, first.state, pick, rng)
         assert first.obs.news and not again.obs.news
         assert "not_applicable" in again.obs.summary
         nxt = [d.step(s, pick, rng).state for s in belief.states[:4]]
@@ -413,13 +431,13 @@ def test_particles_take_the_object_back_when_the_real_hand_still_holds_it(drawer
     d, s0, belief = drawer_episode
     rng = np.random.default_rng(0)
     try:
-        real = d.step(s0, ManipAction("Pick", grasp="top"), rng)
+        real = _real_step(d, s0, ManipAction("Pick", grasp="top"), rng)
         assert real.obs.key[1] == 1.0, real.obs.summary
         rw = d.real.world
         T_go = np.linalg.inv(rw.site_pose(GRIPPER_SITE)) @ rw.object_pose()
         empty = [d.step(s, ManipAction("Place", 0), rng).state for s in belief.states[:3]]
         assert not any(d._holding(s) for s in empty)  # nothing held, nothing placed
-        conditioned = d.condition(type(belief)(empty, np.ones(3) / 3, np.arange(3)))
+        conditioned = d.environment.condition(type(belief)(empty, np.ones(3) / 3, np.arange(3)))
         for s in conditioned.states:
             assert d._holding(s)
             tw = d.worlds.twins[s.origin]
@@ -429,7 +447,7 @@ def test_particles_take_the_object_back_when_the_real_hand_still_holds_it(drawer
     finally:
         d.real.world.restore(s0.sim)
         d.real.weighed = b""
-        d.condition(belief)
+        d.environment.condition(belief)
 
 
 def test_a_drawer_too_narrow_for_its_box_is_refused():
@@ -485,37 +503,40 @@ def test_an_action_that_failed_on_the_real_robot_is_refused_until_a_step_ends_ok
     rng = np.random.default_rng(0)
     place, pick = ManipAction("Place", 0), ManipAction("Pick", grasp="top")
     opening = next(a for a in d.action_space().discretized if a.skill == "OpenDrawer")
-    old, n0 = d._reps, len(d.real.outcomes)
+    old, n0 = d.root.reps, len(d.real.outcomes)
     try:
-        failed = d.step(s0, place, rng)
+        failed = _real_step(d, s0, place, rng)
         assert "not_applicable" in failed.obs.summary
         assert d.real.refused == {(place, -1)} and d.real.now == 1
         root = dataclasses.replace(belief.states[0], t=1)
         assert not d.applicable(root, place)
-        d.real.refused.add((pick, -1))  # as if the real Pick had found no IK
+        d.root = dataclasses.replace(d.root, refused=d.root.refused | {(pick, -1)})
+        # (as if the real Pick had found no IK)
         assert not d.applicable(root, pick)
         assert d.applicable(dataclasses.replace(root, t=2), pick)  # deeper: the twins
-        d.real.refused.add((opening, d._rep(opening)))  # as if it had slipped
+        slipped = (opening, d.root.rep(opening))  # as if it had slipped
+        d.root = dataclasses.replace(d.root, refused=d.root.refused | {slipped})
         assert not d.applicable(root, opening)
         k, h = opening.part, opening.hypothesis
-        d._reps = tuple(tuple(r + 1 if (k2, h2) == (k, h) else r for h2, r in enumerate(row))
-                        for k2, row in enumerate(old))  # fmt: skip
+        _with_reps(d, tuple(tuple(r + 1 if (k2, h2) == (k, h) else r
+                                  for h2, r in enumerate(row))
+                            for k2, row in enumerate(old)))  # fmt: skip
         assert d.applicable(root, opening)  # another particle's joint: offered again
         d.real.refused -= {(pick, -1), (opening, old[k][h])}
-        done = d.step(failed.state, pick, rng)
+        done = _real_step(d, failed.state, pick, rng)
         assert done.obs.key[1] == 1.0, done.obs.summary
         assert not d.real.refused and d.real.now == 2
-        d.step(done.state, ManipAction("Place", TABLE), rng)
+        _real_step(d, done.state, ManipAction("Place", TABLE), rng)
         assert d.report()["real"][-2] == "Pick ok"
         assert d.report()["real"][-1].startswith("Place(table) ")  # told from a Place
     finally:
         del d.real.outcomes[n0:], d.real.labels[n0:]
-        d._reps = old
+        _with_reps(d, old)
         d.real.world.restore(s0.sim)
         d.real.weighed = b""
         d.real.refused.clear()
         d.real.now = 0
-        d.condition(belief)
+        d.environment.condition(belief)
 
 
 def test_a_real_step_that_stopped_before_anything_moved_is_no_evidence(drawer_episode):
@@ -524,7 +545,7 @@ def test_a_real_step_that_stopped_before_anything_moved_is_no_evidence(drawer_ep
     the real belief, and every particle stays as it was, its twin's opening undone."""
     assert {"no_motion_plan", "ik_infeasible"} <= set(BEFORE_MOTION)
     d, _, belief = drawer_episode
-    d.condition(belief)
+    d.environment.condition(belief)
     rng = np.random.default_rng(0)
     opening = next(a for a in d.action_space().discretized if a.skill == "OpenDrawer")
     stepped = [d.step(s, opening, rng).state for s in belief.states]
@@ -543,12 +564,12 @@ def test_a_real_step_that_stopped_before_anything_moved_is_no_evidence(drawer_ep
         assert (np.ptp(d.obs_loglik_many(obs, stepped, opening)) > 0) == evidence, status
     try:
         d.real.still, d.real.now = True, 1
-        post = d.condition(ParticleBelief(stepped, belief.weights, belief.origin))
+        post = d.environment.condition(ParticleBelief(stepped, belief.weights, belief.origin))
         for before, after in zip(belief.states, post.states, strict=True):
             assert after.t == 1 and np.allclose(joints(before), joints(after), atol=1e-6)
     finally:
         d.real.still, d.real.now = False, 0
-        d.condition(belief)
+        d.environment.condition(belief)
 
 
 def test_the_object_picked_too_early_goes_back_onto_the_table(drawer_episode):
@@ -567,7 +588,7 @@ def test_the_object_picked_too_early_goes_back_onto_the_table(drawer_episode):
     assert not d._holding(down.state) and down.reward == 0.0 and not down.done, down.obs.summary
     tw = d.worlds.twins[s.origin]
     tw.restore(down.state.sim)
-    assert np.linalg.norm(tw.world.object_pose()[:3, 3] - d._home[:3, 3]) < 0.03
+    assert np.linalg.norm(tw.world.object_pose()[:3, 3] - d.view.home[:3, 3]) < 0.03
     assert d.applicable(down.state, ManipAction("Pick", grasp="top"))
 
 
@@ -577,28 +598,28 @@ def test_an_opening_follows_the_likeliest_particle_of_its_hypothesis(drawer_epis
     their weight keeps its last one, and the twins' outcomes are cached per holder."""
     d, _, belief = drawer_episode
     n = len(d.worlds)
-    found = [(k, h, [i for i in range(n) if d._classes[i][k] == kind])
+    found = [(k, h, [i for i in range(n) if d.cat.classes[i][k] == kind])
              for k, part in enumerate(d.parts) for h, kind in enumerate(part.hypotheses)
              if kind != "shelf"]  # fmt: skip
     k, h, held = next(f for f in found if len(f[2]) >= 2)
-    assert d._representatives(belief)[k][h] == held[0] == d._reps[k][h]
+    assert representatives(d.cat, belief, d.root.reps)[k][h] == held[0] == d.root.reps[k][h]
     other = held[-1]
     w = np.array([1.0 if s.origin == other else 0.0 for s in belief.states])
-    reps = d._representatives(ParticleBelief(belief.states, w, belief.origin))
+    reps = representatives(d.cat, ParticleBelief(belief.states, w, belief.origin), d.root.reps)
     assert reps[k][h] == other
     lost = [f for f in found if other not in f[2]]
-    assert all(reps[k2][h2] == d._reps[k2][h2] for k2, h2, _ in lost)
+    assert all(reps[k2][h2] == d.root.reps[k2][h2] for k2, h2, _ in lost)
     opening = "OpenDrawer" if d.parts[k].hypotheses[h] == "drawer" else "OpenDoor"
     a, s, rng = ManipAction(opening, k, h), belief.states[0], np.random.default_rng(0)
-    old = d._reps
+    old = d.root.reps
     try:
         d.step(s, a, rng)
-        joint = d._skills(s.origin, a, s.sim)[0][0].joint
-        d._reps = reps
+        joint = d.skills(s.origin, a, s.sim)[0][0].joint
+        _with_reps(d, reps)
         misses = d.worlds.outcomes.misses
         d.step(s, a, rng)
         assert d.worlds.outcomes.misses == misses + 1
-        moved = d._skills(s.origin, a, s.sim)[0][0].joint
+        moved = d.skills(s.origin, a, s.sim)[0][0].joint
         spec = d.worlds.particles[other].spec
         q = d.worlds.particles[other].q
         part = spec.part(d.parts[k].links[other])
@@ -607,7 +628,7 @@ def test_an_opening_follows_the_likeliest_particle_of_its_hypothesis(drawer_epis
         np.testing.assert_allclose(moved.origin, want.origin)
         assert not (np.allclose(moved.axis, joint.axis) and np.allclose(moved.origin, joint.origin))
     finally:
-        d._reps = old
+        _with_reps(d, old)
 
 
 def _undo_real_steps(d, s0, belief, n0: int) -> None:
@@ -618,7 +639,7 @@ def _undo_real_steps(d, s0, belief, n0: int) -> None:
     d.real.weighed = b""
     d.real.refused.clear()
     d.real.now, d.real.still = 0, False
-    d.condition(belief)
+    d.environment.condition(belief)
 
 
 def test_a_real_opening_that_cannot_start_is_planned_in_the_next_holder(
@@ -628,27 +649,27 @@ def test_a_real_opening_that_cannot_start_is_planned_in_the_next_holder(
     that plan cannot start (nothing moves: no evidence, a step lost), it plans in the
     next likeliest holders' models before it spends the step."""
     d, s0, belief = drawer_episode
-    d.condition(belief)
+    d.environment.condition(belief)
     rng = np.random.default_rng(0)
-    mass = d._mass(belief)
+    mass = d.cat.mass(belief)
     a, held = next(
-        (ManipAction("OpenDrawer", k, h), d._holders(mass, k, h))
+        (ManipAction("OpenDrawer", k, h), d.cat.holders(mass, k, h))
         for k, part in enumerate(d.parts)
         for h, kind in enumerate(part.hypotheses)
-        if kind == "drawer" and len(d._holders(mass, k, h)) >= 3
+        if kind == "drawer" and len(d.cat.holders(mass, k, h)) >= 3
     )
-    rep = d._rep(a)
-    assert [i for i, _ in d._plan_models(a, rng)] == held[:REAL_PLAN_MODELS]
+    rep = d.root.rep(a)
+    assert [i for i, _ in d.environment.plan_models(a, rng)] == held[:REAL_PLAN_MODELS]
     assert held[0] == rep and REAL_PLAN_MODELS >= 2
-    skills = d._skills
+    skills = d.skills
 
     def no_plan_in_rep(i, act, sim, holder=None):
         return ([], None) if holder == rep else skills(i, act, sim, holder)
 
-    monkeypatch.setattr(d, "_skills", no_plan_in_rep)
+    monkeypatch.setattr(d, "skills", no_plan_in_rep)
     n0 = len(d.real.outcomes)
     try:
-        step = d.step(s0, a, rng)
+        step = _real_step(d, s0, a, rng)
         m = re.search(r"\[planned in model (\d+), after (\d) that could not start\]",
                       step.obs.summary)  # fmt: skip
         assert m, step.obs.summary
@@ -664,16 +685,16 @@ def test_the_real_pick_routes_in_the_models_current_state(drawer_episode, monkey
     in the search's shared planning world of the closed cabinet (model 0 as
     perceived), through which the arm once swept an open door shut."""
     d, s0, belief = drawer_episode
-    d.condition(belief)
+    d.environment.condition(belief)
     rng = np.random.default_rng(0)
     pick = ManipAction("Pick", grasp="top")
-    i, state = d._likeliest(pick, rng)
+    i, state = d.environment.likeliest(pick, rng)
     calls = []
     fetch = d.worlds.fetch
     monkeypatch.setattr(d.worlds, "fetch", lambda j, st=None: calls.append((j, st)) or fetch(j, st))
     n0 = len(d.real.outcomes)
     try:
-        step = d.step(s0, pick, rng)
+        step = _real_step(d, s0, pick, rng)
         assert step.obs.key[1] == 1.0, step.obs.summary
         assert calls and calls[-1][0] == i and calls[-1][1] is state
     finally:
@@ -690,18 +711,18 @@ def test_the_real_handle_motion_is_measured_on_the_part_acted_on(drawer_episode)
     world, m = d.real.world, d.real.world.model
     spec = world.scene.cabinet_spec
     openings = {a.part: a for a in d.action_space().discretized if a.skill == "OpenDrawer"}
-    acted = [d._real_link(a.part) for a in openings.values()]
+    acted = [d.environment.real_link(a.part) for a in openings.values()]
     assert len(set(acted)) >= 2, acted  # (perception may see a part twice)
     try:
         for a, link in zip(openings.values(), acted, strict=True):
             p = spec.part(link)
-            before = d._handle(REAL, a, world)
+            before = handle_point(world, a, lambda a=a: d.environment.real_link(a.part))
             np.testing.assert_allclose(before, d.real.handles[link])
             world.data.qpos[m.jnt_qposadr[m.joint(world.scene.cabinet_prefix + p.joint).id]] = (
                 p.upper
             )
             mujoco.mj_forward(m, world.data)
-            moved = d._handle(REAL, a, world) - before
+            moved = handle_point(world, a, lambda a=a: d.environment.real_link(a.part)) - before
             assert abs(np.linalg.norm(moved) - p.upper) < 1e-6, (link, moved, p.upper)
             world.restore(s0.sim)
     finally:
@@ -744,7 +765,7 @@ def test_a_believed_knob_is_built_as_a_knob_and_grasped_pitched():
 def test_an_action_without_a_motion_plan_twice_in_a_row_is_refused():
     """``no_motion_plan`` is tried again (another planner seed) but not a third time;
     a collision never refuses; a step that ends ok lifts every refusal."""
-    from strug_manip.domains.manipulation.model import NO_PLAN_TRIES, RealEpisode
+    from strug_manip.domains.manipulation.real import NO_PLAN_TRIES, RealEpisode
 
     assert NO_PLAN_TRIES == 2
     real = RealEpisode(None, 0, "link_1", np.zeros(3), [], [])

@@ -19,8 +19,8 @@ from planners.errors import ConfigError
 from strug_manip.cli import main
 from strug_manip.control import ControlContext, OpenDoor, OpenDrawer
 from strug_manip.control.grasps import handle_grasps
-from strug_manip.domains.manipulation.model import OpenDoorTask
 from strug_manip.domains.manipulation.rules import dragged
+from strug_manip.domains.manipulation.tasks import OpenDoorTask
 from strug_manip.objects import load_articulated_object
 from strug_manip.objects.describe import describe_object
 from strug_manip.objects.generator import HEIGHT_RANGE, TOTAL_MASS
@@ -184,10 +184,10 @@ def test_the_commands_take_an_object_folder(folders: dict[str, Path], tmp_path: 
 def test_a_task_on_an_object_names_its_target_by_link(folders: dict[str, Path]) -> None:
     task = OpenDoorTask(objects=(folders["mixed"],), target_link="link_1", particles=4)
     with pytest.raises(ConfigError, match="is a drawer"):
-        task.sample_initial_state(np.random.default_rng(0))
+        task.environment.reset(np.random.default_rng(0))
     door = next(p for p, t in fixture_truth("mixed")["parts"].items() if t["kind"] == "door")
     task = OpenDoorTask(objects=(folders["mixed"],), target_link=door, particles=4)
-    task.sample_initial_state(np.random.default_rng(0))
+    task.environment.reset(np.random.default_rng(0))
     try:
         assert task.real.target == door
         assert task.real.world.scene.cabinet_spec.name == "mixed"

@@ -24,9 +24,9 @@ from strug_manip.domains.tiger import ExtendedTiger, Tiger, TigerClassic
 
 def _manipulation(cls_name: str) -> Callable[..., GenerativePOMDP]:
     def make(**params: Any) -> GenerativePOMDP:
-        from strug_manip.domains.manipulation import model
+        from strug_manip.domains.manipulation import tasks
 
-        return getattr(model, cls_name)(**params)
+        return getattr(tasks, cls_name)(**params)
 
     make.__name__ = make.__qualname__ = cls_name
     return make

@@ -184,3 +184,18 @@ def label(a: ManipAction) -> str:
     """The skill of ``a`` as reports name it: ``Place(table)`` for the Place back onto
     the table, else the skill's name."""
     return "Place(table)" if a.skill == "Place" and a.part == TABLE else a.skill
+
+
+def part_at_point(
+    spec: CabinetSpec, T: np.ndarray, point: np.ndarray, kinds: tuple[str, ...]
+) -> str | None:
+    """The part of ``kinds`` whose front cell contains ``point`` seen from the front
+    (the cabinet frame's y, z), or None."""
+    c = (np.linalg.inv(T) @ np.r_[point, 1.0])[:3]
+    for p in spec.parts:
+        if p.kind not in kinds:
+            continue
+        half = np.asarray(p.cell_size) / 2
+        if abs(c[1] - p.cell_center[1]) <= half[0] and abs(c[2] - p.cell_center[2]) <= half[1]:
+            return p.link
+    return None

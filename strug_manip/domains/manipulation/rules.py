@@ -19,11 +19,32 @@ from __future__ import annotations
 import numpy as np
 
 from planners.errors import ConfigError
-from strug_manip.control.targets import place_target
+from strug_manip.control import Status, place_target
+from strug_manip.domains.manipulation.state import NOT_APPLICABLE, STATUS_CODES
 from strug_manip.objects.generator import CabinetSpec
 
 #: The cabinet base moved more than this from where it stood [m]: the paper's failure.
 DRAG_LIMIT = 0.1
+#: The outcomes of an action that could not start (nothing moved): no base and arm
+#: reach it, or its plan cannot be made in the model.
+CANNOT_START = (str(Status.IK_INFEASIBLE), NOT_APPLICABLE)
+#: The outcomes of an action that, tried again from nearly the same state against the
+#: same model, ends the same way: it could not start; its grasp slipped off a handle
+#: that does not turn about the joint it followed; it stopped because it slid the
+#: cabinet (again, the slides add up to a drag). A ``collision`` or a missing motion
+#: plan is not among them: the next attempt plans a new path.
+REPEATS_ITSELF = (*CANNOT_START, str(Status.GRASP_LOST), str(Status.CABINET_MOVED))
+#: The outcomes the full robot reaches before anything moves: every IK solution, route
+#: and arm motion of a skill (the stow after it included) is found before it moves, in
+#: the model it plans against (:meth:`.real.RealEnvironment.plan_models`), not in the
+#: real cabinet. Such an outcome is a function of that model and of the planners'
+#: budgets alone, so the real belief weighs it as no evidence and keeps its states as
+#: they were: after a Place whose stow found no plan in time, the particles whose twins
+#: placed the object would otherwise lose to those without the target part (their
+#: twins could not start either), and an episode gave up on the right model.
+BEFORE_MOTION = (*CANNOT_START, str(Status.NO_MOTION_PLAN))
+#: Their status codes, as observation keys carry them.
+BEFORE_MOTION_CODES = frozenset(STATUS_CODES[x] for x in BEFORE_MOTION)
 
 
 def dragged(displacement: float) -> bool:

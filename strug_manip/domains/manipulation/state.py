@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from strug_manip.control.outcome import Status
+from strug_manip.control import Status
 from strug_manip.world.sim import WorldState
 
 #: ``ManipState.origin`` of the real world (not a belief particle).

@@ -1,0 +1,105 @@
+"""The real belief given what the robot knows for certain after a real step
+(:func:`condition`, which the real robot's environment applies after every update).
+
+Known in every particle alike: where the robot's base stands (its odometry), how far
+the cabinet's base has moved since the start (the carcass, which the head camera's cloud
+shows to millimetres; taken from the simulator as a perfect localisation; each
+particle's own cabinet moves by that rigid motion from where it stood, its own front
+where perception put it) and, when the hand is empty, where the object rests (it is
+tracked as well), and which parts stand shut (a front flush with the carcass; which way
+a part opens the camera does not show, so an open part keeps each particle's own joint).
+Each particle keeps its other parts' joints and, when the real hand holds the object,
+its own idea of the grasp; a particle whose hand is empty while the real one holds the
+object (its twin's Place went through where the real one stopped) gets the object back
+in its hand, in the real grasp. Without this a cabinet the real robot dragged by 5 cm
+stays put in every particle, and the next Place aims 5 cm off; and after a real Place
+that stopped, every particle believes the object placed and none plans to place it
+again; and a drawer the arm pushed shut on its way to the cell stays open in every
+particle, and every later Place aims into it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from planners.particles import ParticleBelief
+from strug_manip.control.skills import holds_object
+from strug_manip.domains.manipulation.actions import CataloguePart
+from strug_manip.domains.manipulation.grounding import position
+from strug_manip.domains.manipulation.state import ManipState
+from strug_manip.domains.manipulation.worlds import ParticleWorlds
+from strug_manip.objects.generator import PartSpec
+from strug_manip.robot.fetch import BASE_JOINTS, GRIPPER_SITE
+from strug_manip.world.sim import OBJECT_JOINT, ManipulationWorld
+
+#: A real front this near its closed position is seen shut, by joint type [m or rad]:
+#: the head camera's cloud shows a front flush with the carcass to about a centimetre,
+#: and 0.1 rad is 2 cm at the edge of a 0.2 m door.
+SHUT = {"prismatic": 0.02, "revolute": 0.1}
+
+
+def condition(
+    belief: ParticleBelief,
+    real: ManipulationWorld,
+    w: ParticleWorlds,
+    parts: Sequence[CataloguePart],
+    shut: Sequence[int],
+) -> ParticleBelief:
+    """``belief`` given what the real world ``real`` shows for certain (module
+    docstring); ``shut``: the catalogued parts whose real part stands shut
+    (:func:`is_shut`)."""
+    base = np.array([real.robot_qpos()[j] for j in BASE_JOINTS])
+    moved = real.cabinet_pose() @ np.linalg.inv(real.scene.T_world_cabinet)
+    holding = holds_object(real)
+    known = [] if holding else [OBJECT_JOINT]
+    T_go = np.linalg.inv(real.site_pose(GRIPPER_SITE)) @ real.object_pose() if holding else None
+    done: dict[ManipState, ManipState] = {}
+    states = []
+    for s in belief.states:
+        if s not in done:
+            tw = w.twins[s.origin]
+            tw.restore(s.sim)
+            tw.world.set_cabinet_pose(moved @ tw.world.scene.T_world_cabinet)
+            tw.world.copy_joints(real, known)
+            tw.set_robot_base(base)
+            opened = _opened(parts, s.origin, shut, tw.world)
+            if opened:
+                tw.world.set_parts(opened)
+            if T_go is not None and not holds_object(tw.world):
+                tw.world.set_object_pose(tw.world.site_pose(GRIPPER_SITE) @ T_go)
+            done[s] = ManipState(s.origin, tw.snapshot(), s.t, s.last)
+        states.append(done[s])
+    return ParticleBelief(states, belief.weights, belief.origin)
+
+
+def _opened(
+    parts: Sequence[CataloguePart], i: int, shut: Sequence[int], world: ManipulationWorld
+) -> dict[str, float]:
+    """Particle ``i``'s joints (in its twin's ``world``) of the parts ``shut`` that it
+    holds open, each at 0 (closed), by joint name."""
+    spec = world.scene.cabinet_spec
+    held = [spec.part(link) for k in shut if (link := parts[k].links[i]) is not None]
+    return {p.joint: 0.0 for p in held if not is_shut(world, p)}
+
+
+def unmoved(belief: ParticleBelief, prior: ParticleBelief | None) -> ParticleBelief:
+    """After a real step that stopped before anything moved, ``belief`` with every
+    particle back in its state in ``prior`` (the belief before the step; its step count
+    advanced): a twin that went through moved what the real robot did not touch.
+    Particles correspond by position (the real belief is never resampled); ``belief``
+    as it is when they do not."""
+    if prior is None or len(prior) != len(belief):
+        return belief
+    if not np.array_equal(prior.origin, belief.origin):
+        return belief
+    states = [ManipState(p.origin, p.sim, s.t, s.last)
+              for p, s in zip(prior.states, belief.states, strict=True)]  # fmt: skip
+    return ParticleBelief(states, belief.weights, belief.origin)
+
+
+def is_shut(world: ManipulationWorld, part: PartSpec) -> bool:
+    """``part`` stands within :data:`SHUT` of closed in ``world`` (a fixed part always)."""
+    kind = part.joint_type
+    return kind == "fixed" or abs(position(world, part.joint)) <= SHUT[kind]

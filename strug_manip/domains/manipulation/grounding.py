@@ -1,0 +1,145 @@
+"""An action made concrete: the skills to try and the world to plan them in
+(:func:`skills`), where the acted part's handle is (:func:`handle_point`), and the
+reward of an outcome (:func:`reward`); shared by the twins' POMDP and the real robot.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable
+
+import numpy as np
+
+from planners.errors import ConfigError, UnknownNameError
+from strug_manip.control import (
+    OpenDoor,
+    OpenDrawer,
+    Outcome,
+    Pick,
+    Place,
+    PullH,
+    PullV,
+    Push,
+    handle_grasps,
+    place_targets,
+)
+from strug_manip.domains.manipulation.actions import TABLE, ManipAction, part_point
+from strug_manip.domains.manipulation.catalogue import Catalogue, Root
+from strug_manip.domains.manipulation.rules import dragged, inside
+from strug_manip.domains.manipulation.worlds import ParticleWorlds
+from strug_manip.objects.generator import CabinetSpec
+from strug_manip.objects.hypotheses import BelievedJoint
+from strug_manip.world.sim import ManipulationWorld, WorldState
+
+#: ``Place(table)`` with a side grasp starts this much above the object's spot and comes
+#: down to it [m]: the object held level clears the table top (a top grasp comes down
+#: from above anyway).
+TABLE_LIFT = 0.03
+
+
+def skills(
+    w: ParticleWorlds,
+    cat: Catalogue,
+    root: Root,
+    home: np.ndarray,
+    i: int,
+    a: ManipAction,
+    sim: WorldState,
+    holder: int | None = None,
+) -> tuple[list, ManipulationWorld | None]:
+    """The skills to try in turn (each next grasp or placement while the previous is
+    ``ik_infeasible``) and the planning world, for ``a`` on particle ``i`` in ``sim``
+    (on the real robot: ``i`` is the model it plans in, ``sim`` its state). An
+    opening or a probe follows ``holder``'s grasp and joint and plans in its
+    likeliest state (default: the hypothesis's representative, :meth:`.Root.rep`).
+    ``home``: where ``Place(table)`` puts the object back, (4, 4)."""
+    if a.skill == "Pick":
+        # The object's table is far from the cabinet: one planning world serves
+        # every model, so the base placement is found once for all of them.
+        return [Pick("object", a.grasp)], w.fetch(0)
+    if a.skill == "Place" and a.part == TABLE:
+        return [Place("object", home, TABLE_LIFT)], None
+    part = cat.parts[a.part]
+    if a.skill == "Place":
+        link = part.links[i]
+        if link is None:
+            return [], None
+        tw = w.twins[i]
+        tw.restore(sim)
+        world = tw.world
+        q = position(world, w.particles[i].spec.part(link).joint)
+        T_now = world.cabinet_pose()
+        try:
+            tgts = place_targets(w.particles[i].spec, link, q, T_now)
+        except ConfigError:
+            return [], None  # the part is not open enough: no pose to place at
+        return [Place("object", t.p, t.lift) for t in tgts], None
+    holder = root.rep(a) if holder is None else holder
+    spec_part = w.particles[holder].spec.part(part.links[holder])
+    q = w.particles[holder].q.get(spec_part.joint, 0.0)
+    T = w.pose(holder)
+    grasps = handle_grasps(spec_part, q, T)
+    plan_world = w.fetch(holder, root.best.get(holder))
+    if a.skill in ("OpenDrawer", "OpenDoor"):
+        joint = BelievedJoint.of_part(spec_part, q, T)
+        cls = OpenDrawer if a.skill == "OpenDrawer" else OpenDoor
+        return [cls(g, joint) for g in grasps], plan_world
+    probe = {"Push": Push, "PullV": PullV, "PullH": PullH}[a.skill]
+    return [probe(g) for g in grasps], plan_world
+
+
+def handle_point(
+    world: ManipulationWorld, a: ManipAction, link: Callable[[], str | None]
+) -> np.ndarray:
+    """Where the acted part's handle (or the object, for Pick and Place) is in
+    ``world``, (3,); ``link()`` names the acted part in ``world``'s cabinet (a
+    particle's own link, or the real part acted on)."""
+    if a.skill in ("Pick", "Place"):
+        return world.object_pose()[:3, 3].copy()
+    spec = world.scene.cabinet_spec
+    T = world.cabinet_pose()
+    qs = world.part_positions()
+    name = link()
+    if name is None:
+        return np.zeros(3)
+    p = spec.part(name)
+    pt = part_point(p, qs.get(world.scene.cabinet_prefix + p.joint, 0.0), T)
+    return np.zeros(3) if pt is None else pt
+
+
+def reward(spec: CabinetSpec, target: str | None, world: ManipulationWorld, out: Outcome) -> float:
+    """-10 when dragged; +10 when a ``Place`` leaves the object resting in the target
+    (only a Place can: a model that believes the object already in it, after a real
+    Place that failed, earns nothing from its other actions)."""
+    if dragged(out.cabinet_displacement):
+        return -10.0
+    if target is None or out.holding or out.skill != "Place":
+        return 0.0
+    q = position(world, spec.part(target).joint)
+    T_now = world.cabinet_pose()
+    return 10.0 if inside(spec, target, q, T_now, world.object_pose()) else 0.0
+
+
+def position(world: ManipulationWorld, joint: str) -> float:
+    """Cabinet joint ``joint``'s position in ``world`` [m or rad] (0 for a fixed part)."""
+    return world.part_positions().get(world.scene.cabinet_prefix + joint, 0.0)
+
+
+def attempt(run: Callable[[], Outcome]) -> Outcome | None:
+    """``run()``, or None when the skill cannot be planned in this model (its plan
+    raises: no handle at the grasp, no travel left, nothing held to place)."""
+    try:
+        return run()
+    except (ConfigError, UnknownNameError):
+        return None
+
+
+def first_feasible(runs: Iterable[Callable[[], Outcome]]) -> Outcome | None:
+    """The outcome of the first of ``runs`` (callables, each a skill with its next
+    grasp or placement) that is not ``ik_infeasible``, else the last one's (None when
+    it could not be planned: :func:`attempt`)."""
+    out = None
+    for run in runs:
+        out = attempt(run)
+        if out is not None and out.status != "ik_infeasible":
+            break
+    return out

@@ -1,0 +1,365 @@
+"""The real Fetch and cabinet as an :class:`~planners.environment.Environment`
+(:class:`RealEnvironment`): what executes the planners' actions in a manipulation
+episode.
+
+- ``reset``: a new real cabinet and its target (:mod:`.episode_setup`); the head camera
+  looks from :data:`~.model.VIEWS` poses and the twins' POMDP is handed what it saw
+  (:meth:`.model.ManipulationPOMDP.begin`), never the true cabinet.
+- ``execute``: the full Fetch runs the full skills, planned against the model the
+  belief holds likeliest for the action (:meth:`RealEnvironment.plan_models`), and the
+  head camera's point cloud is rendered: the observation.
+- ``condition``: the belief given what the robot knows for certain
+  (:mod:`.conditioning`); the belief is kept, since the next real step plans against
+  its likeliest models, and the twins' POMDP gets the next search's
+  :class:`.catalogue.Root` (the particle each opening follows, the refused actions).
+"""
+
+from __future__ import annotations
+
+import collections
+import functools
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from perception.likelihood import voxel_thin
+from planners.environment import Executed
+from planners.errors import ConfigError
+from planners.particles import ParticleBelief
+from planners.pomdp import Step
+from strug_manip.control import Outcome, Status
+from strug_manip.control.skills import holds_object
+from strug_manip.domains.manipulation import conditioning
+from strug_manip.domains.manipulation.actions import SAME_PART, TABLE, ManipAction, label
+from strug_manip.domains.manipulation.catalogue import Root, best_states, representatives
+from strug_manip.domains.manipulation.episode_setup import draw_episode, handles
+from strug_manip.domains.manipulation.grounding import first_feasible, handle_point, reward
+from strug_manip.domains.manipulation.model import EpisodeView, ManipulationPOMDP
+from strug_manip.domains.manipulation.rules import (
+    BEFORE_MOTION,
+    CANNOT_START,
+    REPEATS_ITSELF,
+)
+from strug_manip.domains.manipulation.state import (
+    NOT_APPLICABLE,
+    REAL,
+    STATUS_CODES,
+    ManipObservation,
+    ManipState,
+    observation_key,
+)
+from strug_manip.domains.manipulation.worlds import Timers
+from strug_manip.world.sim import CameraFrame, ManipulationWorld, WorldState
+from strug_manip.world.views import cabinet_cloud, look_poses, take_views
+
+#: A ``no_motion_plan`` stop of one action (with the particle it follows) this many
+#: times in a row since the last step that ended ``ok`` refuses it as
+#: :data:`~.rules.REPEATS_ITSELF` would: the robot did not move, so the next try plans
+#: the same motion from the same state with another planner seed, and where two seeds
+#: found no path in the planner's budget a third rarely does (a held-out door episode
+#: spent seven steps on one ``Place`` that way).
+NO_PLAN_TRIES = 2
+#: The real robot plans an opening or a probe in at most this many models before it
+#: spends the step: the hypothesis's representative, then its next likeliest holders.
+#: A plan that stops before anything moves (:data:`~.rules.BEFORE_MOTION`) costs a whole
+#: step and is no evidence, so the belief cannot steer away from it; another holder's
+#: model differs in where the handle, the hinge and the other parts are (a holder that
+#: believes a neighbouring door ajar finds the approach to the target blocked).
+#: Planning is cheap next to a step; three bounds what a step may spend on it.
+REAL_PLAN_MODELS = 3
+
+
+@dataclass
+class RealEpisode:
+    """The real world of the current episode (nothing a planner may read).
+
+    Attributes:
+        world: the scene with the full Fetch.
+        seed: the cabinet's generator seed.
+        target: the target part's link in the true cabinet.
+        point: the point of the cabinet front that names it, world (3,) [m].
+        frames: the head-camera frames taken so far (the initial views, then one per
+            step), for logs.
+        outcomes: the full robot's outcomes, one per step that ran a skill.
+        labels: per outcome, the skill as the report names it (:func:`.actions.label`:
+            ``Place(table)`` for the Place back onto the table, else the skill).
+        weighed: the cabinet's joints (to the mm, as bytes) when the belief last
+            weighed a cloud (``ManipObservation.news``); empty before the first.
+        refused: the actions that failed on the full robot in a way that repeats
+            itself (:data:`~.rules.REPEATS_ITSELF`, or ``no_motion_plan``
+            :data:`NO_PLAN_TRIES` times in a row) since its last step that ended
+            ``ok``, each with the particle it followed (:meth:`.catalogue.Root.rep`);
+            the twins' POMDP refuses them at the root while that particle is still
+            their representative.
+        unplanned: per such (action, particle), its ``no_motion_plan`` stops since the
+            last step that ended ``ok``.
+        now: the step count of the states after the last real step (the root's).
+        still: the last real step stopped before anything moved
+            (:data:`~.rules.BEFORE_MOTION`).
+        handles: the true cabinet's graspable parts' handles where they were when the
+            episode began, world (3,) [m], by link: what tells which real part an
+            opening or a probe acts on (:meth:`RealEnvironment.real_link`).
+    """
+
+    world: ManipulationWorld
+    seed: int
+    target: str
+    point: np.ndarray
+    frames: list[CameraFrame]
+    outcomes: list[Outcome]
+    labels: list[str] = field(default_factory=list)
+    weighed: bytes = b""
+    refused: set[tuple[ManipAction, int]] = field(default_factory=set)
+    unplanned: collections.Counter = field(default_factory=collections.Counter)
+    now: int = 0
+    still: bool = False
+    handles: dict[str, np.ndarray] = field(default_factory=dict)
+
+    def settle(self, key: tuple[ManipAction, int], status: str) -> None:
+        """The refusals after a real step of ``key`` (action, the particle it
+        followed) that ended ``status``: all lifted by ``ok``; ``key`` refused after a
+        failure that repeats itself (:data:`~.rules.REPEATS_ITSELF`) or after
+        :data:`NO_PLAN_TRIES` ``no_motion_plan`` stops in a row."""
+        if status == str(Status.OK):
+            self.refused.clear()
+            self.unplanned.clear()
+        elif status in REPEATS_ITSELF:
+            self.refused.add(key)
+        elif status == str(Status.NO_MOTION_PLAN):
+            self.unplanned[key] += 1
+            if self.unplanned[key] >= NO_PLAN_TRIES:
+                self.refused.add(key)
+
+
+class RealEnvironment:
+    """The real Fetch and cabinet of a manipulation task (module docstring).
+
+    Args:
+        model: the twins' POMDP the planners plan in (its worlds are the models the
+            real robot plans against).
+        cabinet_seed: the real cabinet's generator seed (default: drawn per episode
+            from :data:`~.episode_setup.EPISODE_SEEDS`).
+        target: the point of the cabinet front naming the target part, world (3,)
+            [m]; default: drawn per episode (:mod:`.episode_setup`).
+        target_link: the target part by its link name (``link_2``), instead of
+            ``target``.
+        objects: real object folders (PartNet-Mobility) to act on instead of generated
+            cabinets; the episode's seed draws one.
+        views: head-camera views for perception.
+    """
+
+    def __init__(
+        self,
+        model: ManipulationPOMDP,
+        *,
+        cabinet_seed: int | None = None,
+        target: np.ndarray | None = None,
+        target_link: str | None = None,
+        objects: Sequence[Path] = (),
+        views: int = 4,
+    ) -> None:
+        self.model = model
+        self.cabinet_seed, self.target, self.target_link = cabinet_seed, target, target_link
+        self.objects, self.views = tuple(objects), views
+        self.real: RealEpisode | None = None
+        self.state: ManipState | None = None
+        #: The belief after the last update, conditioned: what the robot plans against.
+        self.belief: ParticleBelief | None = None
+
+    # --- the Environment protocol ------------------------------------------------------
+    def reset(self, rng: np.random.Generator) -> None:
+        """A new real cabinet and its target; the model gets the head camera's views."""
+        self.close()
+        self.model.free_worlds()
+        t0 = time.perf_counter()
+        world, seed, target, point = draw_episode(
+            self.model.task, rng, self.model.ctx, cabinet_seed=self.cabinet_seed,
+            objects=self.objects, target=self.target, target_link=self.target_link,
+        )  # fmt: skip
+        self.real = real = RealEpisode(world, seed, target, point, [], [], handles=handles(world))
+        home = world.object_pose().copy()  # where Place(table) puts it back
+        timers = Timers(setup=time.perf_counter() - t0)
+        self.state = ManipState(REAL, world.snapshot(), 0)
+        t0 = time.perf_counter()
+        frames = take_views(world, self.views)
+        real.frames.extend(frames)
+        clouds = tuple(cabinet_cloud(world, f) for f in frames)
+        timers.perception += time.perf_counter() - t0
+        pose = look_poses(world, 1)[0]
+        self.model.begin(
+            EpisodeView(tuple(frames), clouds, point, home, world.config, pose), timers
+        )
+
+    def execute(self, action: Any, rng: np.random.Generator) -> Executed:
+        """The full Fetch runs ``action`` (module docstring)."""
+        a = self.model.check_action(action)
+        if self.state is None:
+            raise self._no_episode()
+        step = self._real_step(self.state, a, rng)
+        self.state = step.state
+        return Executed(step.obs, step.reward, step.done)
+
+    def condition(self, belief: ParticleBelief) -> ParticleBelief:
+        """``belief`` given what the robot knows for certain (:mod:`.conditioning`),
+        kept; the model's :class:`.catalogue.Root` for the next search."""
+        real, w, model = self.real, self.model.worlds, self.model
+        if real is None or w is None or all(s.t == 0 for s in belief.states):
+            self.belief = belief
+            refused = frozenset(real.refused) if real is not None else frozenset()
+            model.root = Root(model.root.reps, best_states(belief), refused, 0)
+            return belief
+        if real.still:
+            belief = conditioning.unmoved(belief, self.belief)
+        shut = self.shut_parts()
+        self.belief = conditioning.condition(belief, real.world, w, model.parts, shut)
+        reps = representatives(model.cat, self.belief, model.root.reps)
+        model.root = Root(reps, best_states(self.belief), frozenset(real.refused), real.now)
+        return self.belief
+
+    # --- the real step -----------------------------------------------------------------
+    def _real_step(self, s: ManipState, a: ManipAction, rng: np.random.Generator):
+        real, model = self._need_real(), self.model
+        t0 = time.perf_counter()
+        world = real.world
+        world.restore(s.sim)
+        link = functools.partial(self.real_link, a.part)
+        before = handle_point(world, a, link)
+        seed = int(rng.integers(2**31))
+        out, tried = None, 0
+        for i, state in self.plan_models(a, rng):
+            tried += 1
+            world.restore(s.sim)  # a stop before motion may still have stepped it
+            candidates, plan_world = model.skills(i, a, state, holder=i)
+            if plan_world is None or a.skill == "Pick":
+                # The model's state, not the search's shared one for Pick: the route
+                # from the cabinet to the table must keep clear of the doors that
+                # stand open (the arm swept an open door shut on the way).
+                plan_world = model.need_worlds().fetch(i, state)
+            out = first_feasible(
+                functools.partial(sk.run, world, ctx=model.ctx, plan_world=plan_world, seed=seed)
+                for sk in candidates
+            )
+            if out is not None and out.status not in BEFORE_MOTION:
+                break
+        if out is None:
+            status, holding, motion, r, summary = NOT_APPLICABLE, holds_object(world), \
+                np.zeros(3), 0.0, \
+                f"{a.skill}: {NOT_APPLICABLE} under the likeliest model"  # fmt: skip
+        else:
+            real.outcomes.append(out)
+            real.labels.append(label(a))
+            status, holding, summary = out.status, out.holding, out.summary()
+            if tried > 1:  # the belief weighs it as the representative's action
+                summary += f" [planned in model {i}, after {tried - 1} that could not start]"
+            motion = handle_point(world, a, link) - before
+            r = reward(world.scene.cabinet_spec, real.target, world, out)
+        # Such a failure repeats itself until something changes: the plan is made
+        # against the same model, in nearly the same state (applicable()).
+        real.settle((a, model.root.rep(a)), status)
+        real.now = s.t + 1
+        real.still = status in BEFORE_MOTION
+        model.root = replace(model.root, refused=frozenset(real.refused), now=real.now)
+        frame = take_views(world, 1)[0]
+        real.frames.append(frame)
+        cloud = voxel_thin(cabinet_cloud(world, frame))
+        scene = world.cabinet_key()
+        news, real.weighed = scene != real.weighed, scene
+        model.timers.real += time.perf_counter() - t0
+        obs = ManipObservation(observation_key(status, holding, motion), cloud, summary, news)
+        done = r != 0.0 or s.t + 1 >= model.max_steps
+        return Step(ManipState(REAL, world.snapshot(), s.t + 1, obs.key), obs, r, done)
+
+    def plan_models(self, a: ManipAction, rng: np.random.Generator) -> list[tuple[int, WorldState]]:
+        """The models the real robot plans ``a`` against, in the order it tries them
+        while a plan stops before anything moves, each with its state: for an opening
+        or a probe, the hypothesis's representative (:meth:`.catalogue.Root.rep`) and
+        then its next likeliest holders with weight, at most :data:`REAL_PLAN_MODELS`,
+        each in its likeliest current state; for Pick and Place, one model
+        (:meth:`likeliest`)."""
+        model = self.model
+        w, cat = model.need_worlds(), model.cat
+        if a.skill in ("Pick", "Place"):
+            return [self.likeliest(a, rng)]
+        rep = model.root.rep(a)
+        b = self.belief
+        mass = cat.mass(b) if b is not None else np.zeros(len(cat.classes))
+        others = [i for i in cat.holders(mass, a.part, max(a.hypothesis, 0))
+                  if i != rep and mass[i] > 0]  # fmt: skip
+        chosen = [rep, *others][:REAL_PLAN_MODELS]
+        return [(i, model.root.best.get(i) or w.initial[i]) for i in chosen]
+
+    def likeliest(self, a: ManipAction, rng: np.random.Generator) -> tuple[int, WorldState]:
+        """The model the real robot plans Pick or Place against, and its state: the
+        likeliest particle that has the action's part and whose twin can
+        make the action (not ``ik_infeasible``, not :data:`NOT_APPLICABLE`; the search
+        chose the action for the models that can, and a plan made in one that cannot
+        fails before anything moves), else the likeliest that has the part."""
+        model = self.model
+        w = model.need_worlds()
+        b = self.belief
+        if b is None:
+            return 0, w.initial[0]
+        order = np.argsort(-b.weights, kind="stable")
+        states = [b.states[j] for j in order]
+        links = model.parts[a.part].links if a.skill == "Place" and a.part != TABLE else None
+        has = [s for s in states if links is None or links[s.origin] is not None]
+        cannot = {STATUS_CODES[x] for x in CANNOT_START}
+        for s in has:  # the twins' outcomes are cached from the search, mostly
+            if model.step(s, a, rng).obs.key[0] not in cannot:
+                return s.origin, s.sim
+        s = has[0] if has else states[0]
+        return s.origin, s.sim
+
+    def real_link(self, k: int, within: float = np.inf) -> str | None:
+        """The true cabinet's part (link) at catalogued part ``k``, which an opening or
+        a probe of ``k`` acts on: the one whose handle, where it was when the episode
+        began, is nearest the catalogued part's point, if within ``within`` [m]. Not
+        where the handles are now: a door swung open puts its handle far from where it
+        was named, nearer another part's, and its motion would be measured on that
+        other part. None: the cabinet has no graspable part (that near)."""
+        handles = self._need_real().handles
+        ref = self.model.parts[k].point
+        dist = {n: float(np.linalg.norm(h - ref)) for n, h in handles.items()}
+        link = min(dist, key=dist.__getitem__, default=None)
+        return link if link is not None and dist[link] <= within else None
+
+    def shut_parts(self) -> list[int]:
+        """The catalogued parts whose true part stands shut now
+        (:data:`~.conditioning.SHUT`): the true part whose handle, when the episode
+        began, was within :data:`~.actions.SAME_PART` of the catalogued point (none:
+        perception's part has no true counterpart there)."""
+        rw = self._need_real().world
+        links = [self.real_link(k, within=SAME_PART) for k in range(len(self.model.parts))]
+        return [k for k, link in enumerate(links) if link is not None
+                and conditioning.is_shut(rw, rw.scene.cabinet_spec.part(link))]  # fmt: skip
+
+    # --- reports -------------------------------------------------------------------------
+    def report(self) -> dict[str, Any]:
+        """The real cabinet, and what the real robot's skills did (``real``: ``skill
+        status`` per step that ran one, named as in :attr:`RealEpisode.labels`)."""
+        if self.real is None:
+            return {}
+        return {
+            "cabinet_seed": self.real.seed,
+            "cabinet": self.real.world.scene.cabinet_spec.name,
+            "real": [f"{k} {o.status}" for k, o in zip(self.real.labels, self.real.outcomes,
+                     strict=True)],
+        }  # fmt: skip
+
+    def close(self) -> None:
+        """Free the real world (the model frees its own: its ``close``)."""
+        if self.real is not None:
+            self.real.world.close()
+        self.real, self.belief, self.state = None, None, None
+
+    def _need_real(self) -> RealEpisode:
+        if self.real is None:
+            raise self._no_episode()
+        return self.real
+
+    def _no_episode(self) -> ConfigError:
+        return ConfigError(f"{self.model.name}: no episode yet (call reset first)")
