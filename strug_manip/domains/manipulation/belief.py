@@ -52,6 +52,7 @@ from perception.fusion import SIDES, FusedCabinet, PartHypothesis, fuse
 from perception.inputs import View, check_view
 from perception.parts import Perceiver
 from planners.errors import ConfigError, check_positive_int
+from strug_manip.geometry import axis_angle
 from strug_manip.objects import generator as gen
 from strug_manip.objects.assembly import (
     FRONT,
@@ -64,7 +65,7 @@ from strug_manip.objects.assembly import (
     drawer_fits,
     on_stand,
 )
-from strug_manip.objects.generator import CabinetSpec, axis_angle
+from strug_manip.objects.generator import CabinetSpec
 from strug_manip.world.scene import cabinet_pose
 
 #: Opening axis of a door hinged on each side, front frame (the generator's e x n).

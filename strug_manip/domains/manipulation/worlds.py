@@ -18,14 +18,13 @@ Caches (bounded, least recently used dropped first):
 
 from __future__ import annotations
 
-from collections import OrderedDict
-from collections.abc import Hashable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
 from perception.likelihood import voxel_thin
+from strug_manip.cache import LRU
 from strug_manip.control import ControlContext, PlanningTwin
 from strug_manip.domains.manipulation.belief import Particle
 from strug_manip.world.rendering import RenderContext
@@ -37,34 +36,6 @@ from strug_manip.world.views import LookPose, cabinet_cloud, place_robot
 OUTCOMES = 20_000
 #: Predicted clouds kept.
 CLOUDS = 2_000
-
-
-class LRU(OrderedDict):
-    """A dict that keeps its ``size`` most recently used entries and counts hits."""
-
-    def __init__(self, size: int) -> None:
-        super().__init__()
-        self.size, self.hits, self.misses = size, 0, 0
-
-    def lookup(self, key: Hashable) -> Any:
-        """The value under ``key`` (marked used), or None."""
-        v = self.get(key)
-        if v is None:
-            self.misses += 1
-            return None
-        self.hits += 1
-        self.move_to_end(key)
-        return v
-
-    def store(self, key: Hashable, value: Any) -> None:
-        self[key] = value
-        if len(self) > self.size:
-            self.popitem(last=False)
-
-    @property
-    def hit_rate(self) -> float:
-        n = self.hits + self.misses
-        return self.hits / n if n else 0.0
 
 
 @dataclass
