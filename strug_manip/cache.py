@@ -1,12 +1,23 @@
-"""The one bounded cache of the project: a dict that keeps its most recently used
-entries and counts its hits (the control context's motion planners and placements, the
-planning twin's programs, an episode's outcomes, worlds and clouds)."""
+"""The project's caches: the one bounded in-memory cache, a dict that keeps its most
+recently used entries and counts its hits (the control context's motion planners and
+placements, the planning twin's programs, an episode's outcomes, worlds and clouds), and
+the one folder of files derived from code or data (collision pieces, textures)."""
 
 from __future__ import annotations
 
+import os
 from collections import OrderedDict
 from collections.abc import Hashable
+from pathlib import Path
 from typing import Any
+
+import platformdirs
+
+
+def cache_root() -> Path:
+    """The folder of derived files: ``$STRUG_MANIP_CACHE`` if that variable is set, else
+    ``platformdirs.user_cache_dir("strug-manip")``."""
+    return Path(os.environ.get("STRUG_MANIP_CACHE") or platformdirs.user_cache_dir("strug-manip"))
 
 
 class LRU(OrderedDict):

@@ -4,6 +4,7 @@ Usage::
 
     python tools/eval_perception.py --seeds 1000:1030 --views 4
     python tools/eval_perception.py --seeds 2000:2030 --views 4 --json
+    python tools/eval_perception.py --seeds 1000:1030 --style furniture  # furniture look
     python tools/eval_perception.py --seeds 3000:3010 --oracle        # geometry alone
     python tools/eval_perception.py --seeds 3000:3010 --dropout 0.11  # NaN depth dropouts
     python tools/eval_perception.py --objects ~/partnet --views 4       # real objects
@@ -82,7 +83,7 @@ from strug_manip.experiments.seeds import evaluation_seeds
 from strug_manip.objects import generate_cabinet, load_articulated_object
 from strug_manip.objects.assembly import FRONT, GAP
 from strug_manip.objects.describe import describe_object
-from strug_manip.objects.generator import CabinetSpec
+from strug_manip.objects.generator import STYLES, CabinetSpec
 from strug_manip.objects.loader import object_folders
 from strug_manip.world.perception_data import LabelledView, render_episode
 from strug_manip.world.scene import SceneConfig, cabinet_pose
@@ -212,8 +213,8 @@ def evaluate_cabinet(
     or the real object in ``folder`` (``seed``: its name; the views drawn with the
     object's index in the evaluation, ``view_seed``)."""
     if folder is None:
-        lvs = render_episode(int(seed), args.views)
-        spec = generate_cabinet(int(seed))
+        lvs = render_episode(int(seed), args.views, config=SceneConfig(cabinet_style=args.style))
+        spec = generate_cabinet(int(seed), style=args.style)
     else:
         lvs = render_episode(view_seed, args.views, config=SceneConfig(cabinet_folder=folder))
         spec = describe_object(load_articulated_object(folder, progress=False))
@@ -431,6 +432,13 @@ def main(argv: list[str] | None = None) -> int:
         help="a PartNet-Mobility object folder or a folder of them (truth: the object's "
         "own description, from its URDF, semantics and geometry)",
     )
+    ap.add_argument(
+        "--style",
+        choices=STYLES,
+        default="plain",
+        help="the generated cabinets' style (plain: the tasks' cabinets; furniture: the look "
+        "of real furniture)",
+    )
     ap.add_argument("--views", type=int, default=4)
     ap.add_argument("--particles", type=int, default=50)
     ap.add_argument("--noisy-runs", type=int, default=2)
@@ -453,7 +461,7 @@ def main(argv: list[str] | None = None) -> int:
             results.append(evaluate_cabinet(folder.name, args, perceiver, rng, folder, i))
     else:
         seeds = args.seeds
-        what = f"seeds {seeds.start}:{seeds.stop}"
+        what = f"seeds {seeds.start}:{seeds.stop} ({args.style})"
         results = [
             evaluate_cabinet(s, args, perceiver, rng)
             for s in tqdm(seeds, unit="cabinet", disable=args.json)

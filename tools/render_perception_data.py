@@ -2,15 +2,18 @@
 
 Usage::
 
-    python tools/render_perception_data.py --seeds 100000:100500 --out data/perception/train \
-        --empty-prob 0.05
+    python tools/render_perception_data.py --seeds 100000:100600 --out data/perception/train \
+        --empty-prob 0.05 --furniture 0.5
     python tools/render_perception_data.py --seeds 0:100 --out data/perception/test \
         --picture docs/perception_data.png
 
 One ``cabinet_<seed>.npz`` shard per cabinet (see
 :mod:`strug_manip.world.perception_data` for the arrays). Shards already in ``--out`` are
-skipped, so a killed run resumes where it stopped. Training seeds start at
-``TRAIN_SEED_START`` (100,000); seeds below 10,000 are the evaluation split.
+skipped, so a killed run resumes where it stopped. ``--furniture P``: each cabinet is
+drawn in the generator's furniture style with probability ``P``
+(:func:`~strug_manip.world.perception_data.cabinet_style`, fixed by the seed).
+Training seeds start at ``TRAIN_SEED_START`` (100,000); seeds below 10,000 are the
+evaluation split.
 """
 
 from __future__ import annotations
@@ -28,15 +31,18 @@ from strug_manip.experiments.seeds import seed_range
 from strug_manip.world.perception_data import (
     DEFAULT_VIEWS,
     ViewRanges,
+    cabinet_style,
     render_cabinet,
     save_views,
     shard_path,
 )
+from strug_manip.world.scene import SceneConfig
 
 
-def _render_one(seed: int, views: int, out: str, empty_prob: float) -> int:
+def _render_one(seed: int, views: int, out: str, empty_prob: float, furniture: float) -> int:
     ranges = ViewRanges(empty_prob=empty_prob)
-    save_views(shard_path(Path(out), seed), render_cabinet(seed, views, ranges))
+    config = SceneConfig(cabinet_style=cabinet_style(seed, furniture))
+    save_views(shard_path(Path(out), seed), render_cabinet(seed, views, ranges, config))
     return seed
 
 
@@ -99,6 +105,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument(
         "--empty-prob", type=float, default=0.0, help="share of views without the cabinet"
     )
+    ap.add_argument(
+        "--furniture",
+        type=float,
+        default=0.0,
+        help="share of cabinets in the generator's furniture style (drawn per seed)",
+    )
     ap.add_argument("--picture", type=Path, help="also write RGB | depth | parts of one shard")
     args = ap.parse_args(argv)
     from tqdm import tqdm
@@ -109,7 +121,8 @@ def main(argv: list[str] | None = None) -> int:
     t0 = time.perf_counter()
     with ProcessPoolExecutor(max_workers=args.workers, mp_context=get_context("spawn")) as pool:
         futures = [
-            pool.submit(_render_one, s, args.views, str(args.out), args.empty_prob) for s in todo
+            pool.submit(_render_one, s, args.views, str(args.out), args.empty_prob, args.furniture)
+            for s in todo
         ]
         for f in tqdm(as_completed(futures), total=len(futures), unit="cabinet"):
             f.result()

@@ -2,17 +2,19 @@
 
 Usage::
 
-    python tools/render_perception_data.py --seeds 100000:100500 --out data/perception/train \
-        --empty-prob 0.05
+    python tools/render_perception_data.py --seeds 100000:100600 --out data/perception/train \
+        --empty-prob 0.05 --furniture 0.5
     python tools/render_perception_data.py --seeds 3000:3030 --out data/perception/tune
     python tools/train_perception.py --train data/perception/train --test data/perception/tune
 
 Writes ``models/perception/articulation_net.pt`` (weights and the settings they were
-trained with) and ``models/perception/metrics.json`` (the pixel-level figures on the
+trained with), ``models/perception/metrics.json`` (the pixel-level figures on the
 ``--test`` views printed at the end; the per-part evaluation is
-``tools/eval_perception.py``). After every epoch the full training state (weights,
-optimiser, schedule, random generators) goes to ``<out>/checkpoint.pt``; ``--resume``
-continues from it, so a killed run loses at most one epoch. Train and test cabinets
+``tools/eval_perception.py``) and the training curve, ``training_curve.json`` and
+``training_curve.png`` (losses per epoch, held-out pixel figures after each epoch).
+After every epoch the full training state (weights, optimiser, schedule, random
+generators, curve) goes to ``<out>/checkpoint.pt``; ``--resume`` continues from it, so
+a killed run loses at most one epoch. Train and test cabinets
 come from disjoint generator seeds. torch uses one thread by default (``--threads``, at
 most 2): on the project's shared 2-core machines two threads ran ten times slower than
 one whenever other jobs held the cores (README, "Perception network").
@@ -52,6 +54,9 @@ CLASS_WEIGHTS = (0.3, 1.0, 1.0, 1.5, 1.5)
 #: Positive weight of handle pixels (about 1% of the cabinet's pixels).
 HANDLE_POS_WEIGHT = 5.0
 TARGETS = ("cls", "centre", "hinge", "handle")
+#: The per-epoch losses of the training curve, and the held-out figures beside them.
+LOSS_NAMES = ("loss", "class", "centre", "hinge", "handle")
+CURVE_METRICS = ("pixel_accuracy", "iou_prismatic", "iou_revolute", "hinge_side_pixel_accuracy")
 #: Options that change how a run goes, not what it computes (free to change on resume).
 RUN_ONLY = ("resume", "threads")
 
@@ -146,6 +151,29 @@ def evaluate(model: ArticulationNet, split: dict, batch: int = 32) -> dict[str, 
     }
 
 
+def plot_curve(history: list[dict], path: Path) -> None:
+    """The training curve: the losses per epoch (left) and the held-out pixel figures
+    after each epoch (right), as a PNG."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    epochs = [h["epoch"] for h in history]
+    fig, (a, b) = plt.subplots(1, 2, figsize=(10, 3.6))
+    for k in LOSS_NAMES:
+        a.plot(epochs, [h[k] for h in history], marker="o", ms=3, label=k)
+    a.set(xlabel="epoch", ylabel="training loss", yscale="log", title="losses")
+    a.legend(fontsize=8)
+    for k in CURVE_METRICS:
+        b.plot(epochs, [h[f"test_{k}"] for h in history], marker="o", ms=3, label=k)
+    b.set(xlabel="epoch", ylim=(0, 1), title="held-out views (pixels)")
+    b.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+
+
 def _save(path: Path, obj: dict) -> None:
     tmp = path.with_name(path.name + ".tmp")
     torch.save(obj, tmp)
@@ -195,6 +223,7 @@ def main(argv: list[str] | None = None) -> int:
         torch.set_rng_state(ck["torch_rng"])
         start, seconds = ck["epoch"], ck["seconds"]
         print(f"resuming after epoch {start} ({seconds:.0f} s so far)")
+    history: list[dict] = ck.get("history", []) if args.resume and ckpt_path.exists() else []
     tensors = {k: torch.from_numpy(train[k]) for k in ("x", *TARGETS)}
     for epoch in range(start, args.epochs):
         t0 = time.perf_counter()
@@ -215,14 +244,21 @@ def main(argv: list[str] | None = None) -> int:
             run += [total.item(), *(p.item() for p in parts)]
         run /= max(len(batches), 1)
         seconds += time.perf_counter() - t0
+        held_out = evaluate(model, test)  # not counted in the training time
+        history.append({
+            "epoch": epoch + 1, "seconds": round(seconds, 1),
+            **dict(zip(LOSS_NAMES, (round(float(v), 4) for v in run), strict=True)),
+            **{f"test_{k}": round(held_out[k], 4) for k in CURVE_METRICS},
+        })  # fmt: skip
         print(
             f"epoch {epoch + 1}: loss {run[0]:.3f} (class {run[1]:.3f}, centre {run[2]:.3f}, "
-            f"hinge {run[3]:.3f}, handle {run[4]:.3f})  {seconds:.0f} s"
+            f"hinge {run[3]:.3f}, handle {run[4]:.3f}); held-out pixel accuracy "
+            f"{held_out['pixel_accuracy']:.3f}  {seconds:.0f} s"
         )
         _save(ckpt_path, {
             "model": model.state_dict(), "opt": opt.state_dict(), "sched": sched.state_dict(),
             "rng": rng.bit_generator.state, "torch_rng": torch.get_rng_state(),
-            "epoch": epoch + 1, "seconds": seconds,
+            "epoch": epoch + 1, "seconds": seconds, "history": history,
             "args": {k: v for k, v in vars(args).items() if k not in RUN_ONLY},
         })  # fmt: skip
     metrics = evaluate(model, test)
@@ -235,6 +271,8 @@ def main(argv: list[str] | None = None) -> int:
         {"state_dict": model.state_dict(), "width": args.width, "stride": args.stride},
     )
     (args.out / "metrics.json").write_text(json.dumps(metrics, indent=2) + "\n")
+    (args.out / "training_curve.json").write_text(json.dumps(history, indent=1) + "\n")
+    plot_curve(history, args.out / "training_curve.png")
     for k, v in metrics.items():
         print(f"{k}: {v:.3f}" if isinstance(v, float) else f"{k}: {v}")
     return 0

@@ -86,6 +86,32 @@ none 0.2), on drawers and doors only:
 axis 1 cm behind its tip, or (no handle) the point on the front face where the
 handle would be.
 
+Furniture style (``style="furniture"``)
+--------------------------------------
+The plain cabinets above are what the tasks use; real storage furniture
+(PartNet-Mobility's StorageFurniture, e.g. SAPIEN's public objects 40147 and 41083: wood
+with grain, panelled doors with moulded drawer fronts above them, a plinth, bar pulls
+with finials) looks different, and perception trained on plain cabinets alone typed
+under half of those objects' parts right. The furniture style draws the same carcass,
+grid, parts, joints and dynamics (the same ranges and draws) and then, from its own
+stream ``np.random.default_rng([seed, 1])`` (:func:`draw_look`):
+
+- finishes: stained woods (oak to espresso) with a grain texture, or paints; fronts in
+  the body's finish or another (two-tone, 0.35); a countertop (0.5) 18-40 mm thick
+  overhanging the front by 5-30 mm and the sides by up to 20 mm, in the body's colour,
+  stone or another wood; a plinth (0.7) 4-12 cm high, its kick board the body's colour
+  or black;
+- fronts (:data:`FRONT_DESIGNS`): slab, shaker (rails 2-8 cm, 12-22% of the front's
+  smaller side, around a panel 4-9 mm behind them), raised field (a panelled door), or
+  an applied moulding on a slab; drawer fronts share the doors' design half the time;
+  fronts smaller than 10 cm stay slabs;
+- hardware (:data:`HARDWARE`): steel, brass, bronze, black or chrome; door bars up to
+  40 cm (0.4); square bars (0.3); round finials (0.3); mushroom knobs (0.5); a dark
+  finger-grip slot on handle-less fronts (0.5);
+- layout (:data:`MERGES`): one column's lower rows as one tall cell (a door beside a
+  stack of drawers), the top row as one wide cell across the columns (a drawer over
+  doors), or both; a tall cell is never a drawer.
+
 Mass: boards have density ``rho`` in [450, 700] kg/m^3 (pine to MDF), handles 2700
 kg/m^3 (aluminium); ``rho`` is then rescaled if needed so the total mass lies in
 [5, 25] kg, the range of real small storage furniture (IKEA's KULLEN 3-drawer chest,
@@ -96,6 +122,7 @@ for the smallest.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -105,6 +132,7 @@ import numpy as np
 
 from planners.errors import ConfigError, UnknownNameError
 from strug_manip.geometry import axis_angle
+from strug_manip.objects.finishes import GRAIN_COUNT
 
 PartKind = Literal["drawer", "door", "shelf", "panel"]
 HandleKind = Literal["bar", "knob", "none"]
@@ -194,6 +222,8 @@ class Geom:
         axis: cylinder axis, ``"x"``, ``"y"`` or ``"z"`` (ignored for boxes).
         material: ``"wood"`` or ``"metal"`` (selects the density).
         rgba: colour, shape (4,).
+        finish: a surface finish the colour tints (``grain_<k>``,
+            :mod:`strug_manip.objects.finishes`), or ``""`` for a flat colour.
     """
 
     name: str
@@ -203,6 +233,7 @@ class Geom:
     axis: Literal["x", "y", "z"] = "z"
     material: Literal["wood", "metal"] = "wood"
     rgba: tuple[float, float, float, float] = (0.8, 0.8, 0.8, 1.0)
+    finish: str = ""
 
     def volume(self) -> float:
         """Volume [m^3]."""
@@ -525,11 +556,342 @@ def _handle_geoms(
     return [], np.array([x0, y, z])
 
 
+# --- the furniture style ------------------------------------------------------------
+#: Cabinet styles: ``plain`` (flat boards in one grid: the tasks' cabinets) and
+#: ``furniture`` (what real storage furniture looks like, for perception to learn from).
+STYLES: tuple[str, ...] = ("plain", "furniture")
+#: Furniture colours (tinting a grain finish): stained woods, paints, stone tops and
+#: hardware, read off the look of PartNet-Mobility's StorageFurniture (no mesh copied).
+FURNITURE_WOODS: tuple[tuple[float, float, float, float], ...] = (
+    (0.72, 0.53, 0.33, 1.0),  # oak
+    (0.55, 0.28, 0.15, 1.0),  # cherry
+    (0.42, 0.19, 0.11, 1.0),  # mahogany
+    (0.38, 0.25, 0.16, 1.0),  # walnut
+    (0.22, 0.15, 0.11, 1.0),  # espresso
+    (0.80, 0.56, 0.30, 1.0),  # honey pine
+    (0.88, 0.74, 0.55, 1.0),  # maple
+)
+FURNITURE_PAINTS: tuple[tuple[float, float, float, float], ...] = (
+    (0.93, 0.92, 0.88, 1.0),  # white
+    (0.90, 0.85, 0.72, 1.0),  # cream
+    (0.58, 0.65, 0.54, 1.0),  # sage
+    (0.20, 0.26, 0.40, 1.0),  # navy
+    (0.55, 0.56, 0.57, 1.0),  # grey
+    (0.13, 0.13, 0.14, 1.0),  # black
+)
+STONES: tuple[tuple[float, float, float, float], ...] = (
+    (0.90, 0.90, 0.88, 1.0),  # marble
+    (0.42, 0.42, 0.43, 1.0),  # granite
+    (0.12, 0.12, 0.13, 1.0),  # black stone
+)
+HARDWARE: tuple[tuple[float, float, float, float], ...] = (
+    (0.72, 0.72, 0.75, 1.0),  # brushed steel
+    (0.72, 0.58, 0.30, 1.0),  # brass
+    (0.40, 0.29, 0.19, 1.0),  # bronze
+    (0.10, 0.10, 0.10, 1.0),  # black
+    (0.86, 0.86, 0.88, 1.0),  # chrome
+)
+#: Front designs: a slab, a shaker frame around a recessed panel, a raised field in the
+#: frame (a panelled door), an applied moulding on a slab.
+FRONT_DESIGNS: dict[str, float] = {"slab": 0.3, "shaker": 0.3, "raised": 0.3, "moulded": 0.1}
+#: Layout merges: a column's lower rows one tall cell, the top row one wide cell, both.
+MERGES: dict[str, float] = {"none": 0.4, "tall": 0.3, "wide": 0.15, "both": 0.15}
+FURNITURE_PLINTH = (0.04, 0.12)  # [m], real kitchen bases stand on 10 cm plinths
+FURNITURE_PLINTH_PROB = 0.7
+COUNTERTOP_PROB = 0.5
+COUNTERTOP_THICKNESS = (0.018, 0.04)  # [m]
+COUNTERTOP_OVERHANG = ((0.005, 0.03), (0.0, 0.02))  # front, sides [m]
+FRAME_FRAC = (0.12, 0.22)  # rail width / the front's smaller extent
+FRAME_WIDTH = (0.02, 0.08)  # [m], clamp of the rail width
+RECESS = (0.004, 0.009)  # [m], how far a panel sits behind its frame
+MIN_FRAMED = 0.10  # [m], a smaller front stays a slab
+LONG_BAR = (0.15, 0.40)  # [m], door pulls of real furniture reach 40 cm
+LONG_BAR_PROB = 0.4
+
+
+@dataclass(frozen=True)
+class FurnitureLook:
+    """What a furniture-style cabinet looks like, drawn by :func:`draw_look`.
+
+    Attributes:
+        colors: ``body``, ``front``, ``handle``, ``kick`` and ``top`` colours (4,).
+        finishes: ``body``, ``front`` and ``top`` finish names (``""``: flat colour).
+        plinth: plinth height [m] (0: none).
+        top: countertop thickness, front and side overhang [m], or ``None``.
+        door_design, drawer_design: keys of :data:`FRONT_DESIGNS`.
+        frame_frac: rail width as a share of a front's smaller extent.
+        recess: panel depth behind the frame [m].
+        bar_length: bar handle length [m] (before the 0.6 x front cap).
+        square_bar: a square bar instead of a round one.
+        bar_ends: round finials on the bar's ends.
+        knob_cap: a mushroom knob's cap radius / the knob's radius (0: a plain cylinder).
+        grip_slot: handle-less fronts get a dark finger-grip slot.
+        merge: key of :data:`MERGES`; merge_at: (column, row) draws in [0, 1).
+    """
+
+    colors: dict[str, tuple[float, float, float, float]]
+    finishes: dict[str, str]
+    plinth: float
+    top: tuple[float, float, float] | None
+    door_design: str
+    drawer_design: str
+    frame_frac: float
+    recess: float
+    bar_length: float
+    square_bar: bool
+    bar_ends: bool
+    knob_cap: float
+    grip_slot: bool
+    merge: str
+    merge_at: tuple[float, float]
+
+    @property
+    def top_height(self) -> float:
+        """Height the countertop adds on the carcass [m]."""
+        return self.top[0] if self.top is not None else 0.0
+
+    def top_geoms(self, W: float, D: float, H: float) -> list[Geom]:
+        """The countertop on the carcass (object frame), if any."""
+        if self.top is None:
+            return []
+        th, front, side = self.top
+        lo, hi = (-0.5 * D, -0.5 * W - side, H), (0.5 * D + front, 0.5 * W + side, H + th)
+        top = box("countertop", lo, hi, self.colors["top"])
+        return [dataclasses.replace(top, finish=self.finishes["top"])]
+
+    def finish_body(self, geoms: Sequence[Geom]) -> list[Geom]:
+        """The carcass boards in the body finish (glides, kick board and top as they are)."""
+        body = self.colors["body"]
+        return [
+            dataclasses.replace(g, finish=self.finishes["body"])
+            if g.shape == "box" and g.rgba == body and not g.finish
+            else g
+            for g in geoms
+        ]
+
+    def dress(self, draft: dict, tf: float) -> tuple[Geom, ...]:
+        """A part's geometry in this look: framed fronts, finishes, restyled handles."""
+        design = self.drawer_design if draft["kind"] == "drawer" else self.door_design
+        out: list[Geom] = []
+        for g in draft["geoms"]:
+            if g.name in ("front", "panel") and draft["kind"] != "shelf":
+                out += self._front(g, design, tf)
+            elif g.name.startswith("handle"):
+                out += self._handle(g)
+            else:
+                out.append(g)
+        if draft["handle"] == "none" and self.grip_slot and draft["kind"] in MOVABLE_KINDS:
+            out.append(self._slot(draft))
+        finish = {
+            self.colors["front"]: self.finishes["front"],
+            self.colors["body"]: self.finishes["body"],
+        }
+        return tuple(
+            dataclasses.replace(g, finish=finish.get(g.rgba, "")) if g.material == "wood" else g
+            for g in out
+        )
+
+    def _front(self, g: Geom, design: str, tf: float) -> list[Geom]:
+        """A front board ``g`` (thickness along x) built as ``design``."""
+        c, (_, fw, fh) = np.asarray(g.pos), g.size
+        small = min(fw, fh)
+        if design == "slab" or small < MIN_FRAMED:
+            return [g]
+        x1 = c[0] + 0.5 * tf  # the front face
+        y0, y1, z0, z1 = c[1] - 0.5 * fw, c[1] + 0.5 * fw, c[2] - 0.5 * fh, c[2] + 0.5 * fh
+        if design == "moulded":
+            m, w = min(max(0.12 * small, 0.02), 0.06), 0.012
+            strips = [
+                ((y0 + m, z1 - m - w), (y1 - m, z1 - m)), ((y0 + m, z0 + m), (y1 - m, z0 + m + w)),
+                ((y0 + m, z0 + m + w), (y0 + m + w, z1 - m - w)),
+                ((y1 - m - w, z0 + m + w), (y1 - m, z1 - m - w)),
+            ]  # fmt: skip
+            return [g] + [
+                box(f"{g.name}_moulding_{k}", (x1, a[0], a[1]), (x1 + 0.005, b[0], b[1]), g.rgba)
+                for k, (a, b) in enumerate(strips)
+            ]
+        r = min(max(self.frame_frac * small, FRAME_WIDTH[0]), FRAME_WIDTH[1], 0.3 * small)
+        x0, rec = x1 - tf, min(self.recess, tf - 0.006)
+        rails = [
+            ((y0, z1 - r), (y1, z1)), ((y0, z0), (y1, z0 + r)),
+            ((y0, z0 + r), (y0 + r, z1 - r)), ((y1 - r, z0 + r), (y1, z1 - r)),
+        ]  # fmt: skip
+        out = [
+            box(f"{g.name}_rail_{k}", (x0, a[0], a[1]), (x1, b[0], b[1]), g.rgba)
+            for k, (a, b) in enumerate(rails)
+        ]
+        out.append(
+            box(f"{g.name}_centre", (x0, y0 + r, z0 + r), (x1 - rec, y1 - r, z1 - r), g.rgba)
+        )
+        if design == "raised":
+            b = min(0.25 * r + 0.01, 0.03)  # the bevel's width around the field
+            lo, hi = (x0, y0 + r + b, z0 + r + b), (x1 - 0.3 * rec, y1 - r - b, z1 - r - b)
+            out.append(box(f"{g.name}_field", lo, hi, g.rgba))
+        return out
+
+    def _handle(self, g: Geom) -> list[Geom]:
+        """A handle geom in this look: square bars, finials, mushroom knobs."""
+        if g.name == "handle_bar":
+            r, length = g.size
+            out = [g]
+            if self.square_bar:
+                side = [1.8 * r] * 3
+                side["xyz".index(g.axis)] = length
+                out = [Geom("handle_bar", "box", g.pos, tuple(side), "x", "metal", g.rgba)]
+            if self.bar_ends:
+                for k, sign in enumerate((-1.0, 1.0)):
+                    p = np.asarray(g.pos, dtype=float)
+                    p["xyz".index(g.axis)] += sign * 0.5 * length
+                    at = tuple(float(v) for v in p)
+                    out.append(
+                        Geom(f"handle_end_{k}", "sphere", at, (1.5 * r,), "z", "metal", g.rgba)
+                    )
+            return out
+        if g.name == "handle_knob" and self.knob_cap > 0:
+            r, length = g.size
+            x = g.pos[0] - 0.5 * length  # the face
+            yz = tuple(g.pos[1:])
+            stem_size, cap_size = (0.5 * r, 0.6 * length), (self.knob_cap * r, 0.4 * length)
+            stem = Geom("handle_knob", "cylinder", (x + 0.3 * length, *yz), stem_size, "x",
+                        "metal", g.rgba)  # fmt: skip
+            cap = Geom("handle_cap", "cylinder", (x + 0.8 * length, *yz), cap_size, "x",
+                       "metal", g.rgba)  # fmt: skip
+            return [stem, cap]
+        return [g]
+
+    def _slot(self, draft: dict) -> Geom:
+        """A dark finger-grip slot (a flat strip on the face) where a pull would be."""
+        (fw, fh), hinge = draft["cell_size"], draft["hinge"]
+        p = draft["handle_pos"] - draft["origin"]  # the would-be handle point, link frame
+        if hinge in ("left", "right"):
+            size = (0.002, 0.012, min(0.12, 0.5 * fh))
+        else:
+            size = (0.002, min(0.15, 0.5 * fw), 0.012)
+        centre = (float(p[0]) + 0.001, float(p[1]), float(p[2]))
+        return Geom("grip_slot", "box", centre, size, "z", "wood", (0.05, 0.05, 0.05, 1.0))
+
+
+def draw_look(rng: np.random.Generator) -> FurnitureLook:
+    """Draw a :class:`FurnitureLook` (its own stream: the plain draws stay as they are)."""
+    painted = rng.random() < 0.35
+    body = FURNITURE_PAINTS[int(rng.integers(len(FURNITURE_PAINTS)))] if painted else (
+        FURNITURE_WOODS[int(rng.integers(len(FURNITURE_WOODS)))])  # fmt: skip
+    two_tone = rng.random() < 0.35
+    pool = FURNITURE_WOODS if rng.random() < 0.5 else FURNITURE_PAINTS
+    front = pool[int(rng.integers(len(pool)))] if two_tone else body
+    top_kind = rng.random()
+    top_rgba = body if top_kind < 0.4 else (
+        STONES[int(rng.integers(len(STONES)))] if top_kind < 0.8 else
+        FURNITURE_WOODS[int(rng.integers(len(FURNITURE_WOODS)))])  # fmt: skip
+
+    def finish(rgba: tuple) -> str:
+        if rgba in FURNITURE_WOODS:  # figured grain
+            return f"grain_{int(rng.integers(3, GRAIN_COUNT))}"
+        return "" if rng.random() < 0.5 else f"grain_{int(rng.integers(0, 2))}"  # paint, stone
+
+    finishes = {"body": finish(body), "front": finish(front), "top": finish(top_rgba)}
+    kick = body if rng.random() < 0.6 else (0.1, 0.1, 0.1, 1.0)
+    colors = {"body": body, "front": front, "kick": kick, "top": top_rgba,
+              "handle": HARDWARE[int(rng.integers(len(HARDWARE)))]}  # fmt: skip
+    plinth = _uniform(rng, FURNITURE_PLINTH) if rng.random() < FURNITURE_PLINTH_PROB else 0.0
+    top = None
+    if rng.random() < COUNTERTOP_PROB:
+        front_o, side_o = COUNTERTOP_OVERHANG
+        top = (_uniform(rng, COUNTERTOP_THICKNESS), _uniform(rng, front_o), _uniform(rng, side_o))
+    door_design = _choice(rng, FRONT_DESIGNS, tuple(FRONT_DESIGNS))
+    drawer_design = (
+        door_design
+        if rng.random() < 0.5
+        else _choice(rng, FRONT_DESIGNS, ("slab", "shaker", "moulded"))
+    )
+    long_bar = rng.random() < LONG_BAR_PROB
+    bar_length = _uniform(rng, LONG_BAR if long_bar else BAR_LENGTH)
+    cap = float(rng.uniform(1.3, 1.8)) if rng.random() < 0.5 else 0.0  # mushroom knobs
+    merge_at = (float(rng.random()), float(rng.random()))
+    return FurnitureLook(
+        colors=colors, finishes=finishes, plinth=plinth, top=top,
+        door_design=door_design, drawer_design=drawer_design,
+        frame_frac=_uniform(rng, FRAME_FRAC), recess=_uniform(rng, RECESS),
+        bar_length=bar_length, square_bar=bool(rng.random() < 0.3),
+        bar_ends=bool(rng.random() < 0.3), knob_cap=cap, grip_slot=bool(rng.random() < 0.5),
+        merge=_choice(rng, MERGES, tuple(MERGES)), merge_at=merge_at,
+    )  # fmt: skip
+
+
+def merge_cells(look: FurnitureLook, rows: int, cols: int) -> list[tuple[int, int, int, int]]:
+    """The cells of a ``rows`` x ``cols`` grid after the look's merges, row-major by
+    their top-left cell: ``(row, col, row span, col span)``. ``tall``: one column's
+    rows from a drawn row down to the bottom are one cell; ``wide``: the top row is one
+    cell across every column; ``both``: the two (tall below the wide top)."""
+    owner = [[(i, j) for j in range(cols)] for i in range(rows)]
+    spans: dict[tuple[int, int], tuple[int, int]] = {}
+    wide = look.merge in ("wide", "both") and cols >= 2 and rows >= 2
+    if wide:
+        spans[(0, 0)] = (1, cols)
+        for j in range(cols):
+            owner[0][j] = (0, 0)
+    first = 1 if wide else 0
+    if look.merge in ("tall", "both") and rows - first >= 2:
+        j = min(int(look.merge_at[0] * cols), cols - 1)
+        r0 = first + min(int(look.merge_at[1] * (rows - first - 1)), rows - first - 2)
+        spans[(r0, j)] = (rows - r0, 1)
+        for i in range(r0, rows):
+            owner[i][j] = (r0, j)
+    cells = sorted({owner[i][j] for i in range(rows) for j in range(cols)})
+    return [(i, j, *spans.get((i, j), (1, 1))) for i, j in cells]
+
+
+def _dividers(
+    cells: Sequence[tuple[int, int, int, int]],
+    z_edges: Sequence[tuple[float, float]],
+    y_edges: Sequence[tuple[float, float]],
+    xs: tuple[float, float],
+    t: float,
+    rgba: tuple[float, float, float, float],
+) -> list[Geom]:
+    """The divider boards between different cells (thickness ``t``, from the back panel's
+    inner face to the front plane ``xs``): horizontal boards in runs of columns, upright
+    ones through the horizontal boards' thickness so the carcass stays closed."""
+    rows, cols = len(z_edges), len(y_edges)
+    owner = [[-1] * cols for _ in range(rows)]
+    for k, (i, j, rs, cs) in enumerate(cells):
+        for a in range(i, i + rs):
+            for b in range(j, j + cs):
+                owner[a][b] = k
+    xb, xf = xs
+    out: list[Geom] = []
+    for i in range(rows - 1):
+        z1 = z_edges[i][0]
+        run = [j for j in range(cols) if owner[i][j] != owner[i + 1][j]]
+        for k, (a, b) in enumerate(_runs(run)):
+            lo, hi = (xb, y_edges[a][0], z1 - t), (xf, y_edges[b][1], z1)
+            out.append(box(f"shelf_divider_{i}_{k}", lo, hi, rgba))
+    for i, (z0, z1) in enumerate(z_edges):
+        below = t if i < rows - 1 else 0.0
+        for j in range(cols - 1):
+            if owner[i][j] != owner[i][j + 1]:
+                y1 = y_edges[j][1]
+                out.append(box(f"divider_{i}_{j}", (xb, y1, z0 - below), (xf, y1 + t, z1), rgba))
+    return out
+
+
+def _runs(js: Sequence[int]) -> list[tuple[int, int]]:
+    """Consecutive runs of sorted integers, as (first, last)."""
+    out: list[tuple[int, int]] = []
+    for j in js:
+        if out and out[-1][1] == j - 1:
+            out[-1] = (out[-1][0], j)
+        else:
+            out.append((j, j))
+    return out
+
+
 def generate_cabinet(
     seed: int,
     *,
     kinds: Sequence[str] = PART_KINDS,
     handles: Sequence[str] = HANDLE_KINDS,
+    style: str = "plain",
 ) -> CabinetSpec:
     """Draw one storage cabinet from ``np.random.default_rng(seed)``.
 
@@ -539,6 +901,9 @@ def generate_cabinet(
             "shelf", "panel")``: ``("drawer",)`` for OpenDrawer, ``("door",)`` for
             OpenDoor, ``("shelf",)`` for Shelf.
         handles: handle styles allowed, a subset of ``("bar", "knob", "none")``.
+        style: ``"plain"`` (the tasks' cabinets: flat boards, one grid) or
+            ``"furniture"`` (the look of real storage furniture, :data:`STYLES`; what
+            perception is trained on besides the plain ones).
 
     Returns:
         The :class:`CabinetSpec` (ranges in the module docstring).
@@ -551,12 +916,18 @@ def generate_cabinet(
         raise ConfigError(f"seed must be an integer >= 0, got {seed!r}")
     kinds = _check_names("part kind", kinds, PART_KINDS)
     handles = _check_names("handle style", handles, HANDLE_KINDS)
+    if style not in STYLES:
+        raise UnknownNameError("cabinet style", style, STYLES)
     rng = np.random.default_rng(int(seed))
+    # The furniture look draws from its own stream: the plain draws stay as they were.
+    look = draw_look(np.random.default_rng([int(seed), 1])) if style == "furniture" else None
 
     # --- carcass --------------------------------------------------------------------
     W, D, H = _uniform(rng, WIDTH_RANGE), _uniform(rng, DEPTH_RANGE), _uniform(rng, HEIGHT_RANGE)
     t, tb = _uniform(rng, WALL_RANGE), _uniform(rng, BACK_RANGE)
     plinth = _uniform(rng, PLINTH_RANGE) if rng.random() < PLINTH_PROB else 0.0
+    if look is not None:
+        plinth = look.plinth
     W_in, H_in = W - 2 * t, H - plinth - 2 * t
     cols = _count(rng, W_in, t, CELL_WIDTH_RANGE, MAX_COLS)
     rows = _count(rng, H_in, t, CELL_HEIGHT_RANGE, MAX_ROWS)
@@ -566,6 +937,8 @@ def generate_cabinet(
     body_rgba = _WOODS[int(palette[0])]
     front_rgba = body_rgba if rng.random() < 0.5 else _WOODS[int(palette[1])]
     colors = {"body": body_rgba, "front": front_rgba, "handle": _METAL}
+    if look is not None:
+        colors, body_rgba = dict(look.colors), look.colors["body"]
 
     xf, xb = 0.5 * D, -0.5 * D + tb  # front plane, inner face of the back panel
     y_lo, y_hi = -0.5 * W + t, 0.5 * W - t
@@ -578,7 +951,8 @@ def generate_cabinet(
         box("back", (-0.5 * D, y_lo, plinth), (xb, y_hi, z_top), body_rgba),
     ]
     if plinth > 0:
-        body.append(box("kick", (xf - 0.03 - t, y_lo, 0.0), (xf - 0.03, y_hi, plinth), body_rgba))
+        kick = body_rgba if look is None else look.colors["kick"]
+        body.append(box("kick", (xf - 0.03 - t, y_lo, 0.0), (xf - 0.03, y_hi, plinth), kick))
     for i, (sx, sy) in enumerate(((1, 1), (1, -1), (-1, 1), (-1, -1))):
         center = (sx * (0.5 * D - GLIDE_INSET), sy * (0.5 * W - GLIDE_INSET), 0.0)
         body.append(Geom(f"glide_{i}", "sphere", center, (GLIDE_RADIUS,), rgba=(0.2, 0.2, 0.2, 1)))
@@ -591,21 +965,36 @@ def generate_cabinet(
     for w in col_widths:
         y_edges.append((y, y + w))
         y += w + t
-    for i in range(rows - 1):
-        z1 = z_edges[i][0]
-        body.append(box(f"shelf_divider_{i}", (xb, y_lo, z1 - t), (xf, y_hi, z1), body_rgba))
-    for i, (z0, z1) in enumerate(z_edges):
-        for j in range(cols - 1):
-            y1 = y_edges[j][1]
-            body.append(box(f"divider_{i}_{j}", (xb, y1, z0), (xf, y1 + t, z1), body_rgba))
+    cells = [(i, j, 1, 1) for i in range(rows) for j in range(cols)]
+    if look is None:
+        for i in range(rows - 1):
+            z1 = z_edges[i][0]
+            body.append(box(f"shelf_divider_{i}", (xb, y_lo, z1 - t), (xf, y_hi, z1), body_rgba))
+        for i, (z0, z1) in enumerate(z_edges):
+            for j in range(cols - 1):
+                y1 = y_edges[j][1]
+                body.append(box(f"divider_{i}_{j}", (xb, y1, z0), (xf, y1 + t, z1), body_rgba))
+    else:
+        cells = merge_cells(look, rows, cols)
+        body += _dividers(cells, z_edges, y_edges, (xb, xf), t, body_rgba)
+        body = look.finish_body(body) + look.top_geoms(W, D, H)
 
     # --- cells ----------------------------------------------------------------------
-    n_cells = rows * cols
+    n_cells = len(cells)
     cell_kinds = [_choice(rng, KIND_WEIGHTS, kinds) for _ in range(n_cells)]
     movable_allowed = [k for k in kinds if k in MOVABLE_KINDS]
     if movable_allowed and not any(k in MOVABLE_KINDS for k in cell_kinds):
         cell_kinds[int(rng.integers(n_cells))] = _choice(rng, KIND_WEIGHTS, movable_allowed)
-    style = _choice(rng, HANDLE_WEIGHTS, handles)
+    others = [k for k in kinds if k != "drawer"]
+    for idx, (_, _, rs, _) in enumerate(cells):
+        # No drawer is taller than a row: a door, else another kind if a part still moves.
+        if rs == 1 or cell_kinds[idx] != "drawer" or not others:
+            continue
+        if "door" in others:
+            cell_kinds[idx] = "door"
+        elif sum(k in MOVABLE_KINDS for k in cell_kinds) > 1:
+            cell_kinds[idx] = _choice(rng, KIND_WEIGHTS, others)
+    handle_style = _choice(rng, HANDLE_WEIGHTS, handles)
     gap, tf = _uniform(rng, GAP_RANGE), _uniform(rng, FRONT_RANGE)
     handle_params = {
         "bar_radius": _uniform(rng, BAR_RADIUS),
@@ -614,15 +1003,22 @@ def generate_cabinet(
         "knob_radius": _uniform(rng, KNOB_RADIUS),
         "knob_length": _uniform(rng, KNOB_LENGTH),
     }
+    if look is not None:
+        handle_params["bar_length"] = look.bar_length
     rho = _uniform(rng, WOOD_DENSITY)
 
     drafts: list[dict] = []
-    for idx in range(n_cells):
-        i, j = divmod(idx, cols)
-        (z0, z1), (y0, y1) = z_edges[i], y_edges[j]
-        draft = _draft_part(
-            rng, cell_kinds[idx], (y0, y1), (z0, z1), xf, xb, gap, tf, style, handle_params, colors
+    for idx, (i, j, rs, cs) in enumerate(cells):
+        (z0, z1), (y0, y1) = (
+            (z_edges[i + rs - 1][0], z_edges[i][1]),
+            (y_edges[j][0], y_edges[j + cs - 1][1]),
         )
+        draft = _draft_part(
+            rng, cell_kinds[idx], (y0, y1), (z0, z1), xf, xb, gap, tf, handle_style,
+            handle_params, colors,
+        )  # fmt: skip
+        if look is not None:
+            draft["geoms"] = look.dress(draft, tf)
         draft.update(row=i, col=j, link=f"link_{idx + 1}", joint=f"joint_{idx + 1}")
         drafts.append(draft)
 
@@ -647,7 +1043,7 @@ def generate_cabinet(
         kinds=kinds,
         width=W,
         depth=D,
-        height=H,
+        height=H + (look.top_height if look is not None else 0.0),
         wall=t,
         back=tb,
         plinth=plinth,

@@ -35,13 +35,13 @@ import coacd
 # isort: on
 import cv2
 import numpy as np
-import platformdirs
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import ConvexHull, QhullError, cKDTree
 from tqdm import tqdm
 
 from planners.errors import ConfigError
+from strug_manip.cache import cache_root
 
 # PartNet panels are zero-thickness surfaces; 1 cm is a thin board, between the generator's
 # drawer boards (8-12 mm) and its fronts (15-22 mm), see strug_manip/objects/generator.py.
@@ -399,8 +399,7 @@ def png_texture(image: Path, cache_dir: Path | None = None) -> Path | None:
 def default_cache_dir() -> Path:
     """Folder of cached decompositions: ``$STRUG_MANIP_CACHE/coacd`` if that variable is
     set, else ``platformdirs.user_cache_dir("strug-manip")/coacd``."""
-    root = os.environ.get("STRUG_MANIP_CACHE") or platformdirs.user_cache_dir("strug-manip")
-    return Path(root) / "coacd"
+    return cache_root() / "coacd"
 
 
 def convex_pieces(

@@ -42,6 +42,7 @@ import numpy as np
 
 from planners.errors import ConfigError
 from strug_manip.geometry import quat_of
+from strug_manip.objects.finishes import GRAIN_METRES
 from strug_manip.objects.urdf import GeometryInfo, LinkInfo, ParsedUrdf
 
 SHELL_DENSITY = 6.0  # [kg/m^2] surface density of links without <inertial>
@@ -137,13 +138,18 @@ def build_bodies(
         return meshes[key]
 
     def material_name(g: GeometryInfo) -> str:
-        """A material wearing ``g.texture`` (one per image and tint)."""
-        key = (str(g.texture), g.rgba)
+        """A material wearing ``g.texture`` (one per image and tint). A primitive has no
+        texture coordinates: MuJoCo maps the image in metres (``texuniform``), one copy
+        per :data:`~strug_manip.objects.finishes.GRAIN_METRES`."""
+        key = (str(g.texture), g.rgba, g.shape == "mesh")
         if key not in materials:
             name = f"{prefix}material_{len(materials)}"
             spec.add_texture(name=name, type=mujoco.mjtTexture.mjTEXTURE_2D, file=str(g.texture))
             mat = spec.add_material(name=name, rgba=list(g.rgba or (1.0, 1.0, 1.0, 1.0)))
             mat.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = name
+            if g.shape != "mesh":
+                mat.texuniform = True
+                mat.texrepeat = [1.0 / GRAIN_METRES, 1.0 / GRAIN_METRES]
             materials[key] = name
         return materials[key]
 
@@ -180,6 +186,8 @@ def build_bodies(
                 if g.shape == "mesh":
                     geom.meshname = mesh_name(g)
                 rgba = (vis.rgba if vis is not None else None) or g.rgba
+                if vis is not None and vis.texture is not None:
+                    geom.material = material_name(vis)
                 if kind == "collision":
                     geom.group = 0 if vis is not None else 3
                     geom.rgba = rgba if rgba is not None else (0.6, 0.6, 0.6, 1.0 if vis else 0.4)

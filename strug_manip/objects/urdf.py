@@ -51,8 +51,9 @@ class GeometryInfo:
             the geom frame, scale applied, shape (n, 3) [m]; ``None`` for files.
         faces: its triangles, shape (m, 3) int, or ``None`` (a convex piece: MuJoCo
             takes the hull of the vertices).
-        texture: a PNG image the mesh wears (visual meshes), or ``None``; then
-            ``texcoords`` (k, 2) and ``face_texcoords`` (m, 3) int map it.
+        texture: a PNG image the geometry wears, or ``None``: a visual mesh's (then
+            ``texcoords`` (k, 2) and ``face_texcoords`` (m, 3) int map it), or a
+            primitive's material texture (a generated finish, mapped in metres).
     """
 
     name: str
@@ -204,13 +205,29 @@ class _Parser:
         return T
 
     def materials(self, root: ET.Element) -> dict[str, tuple]:
+        """Named materials: ``name -> (rgba or None, texture path or None)``."""
         out = {}
         for m in root.findall("material"):
-            color = m.find("color")
-            if m.get("name") and color is not None:
-                what = f"material {m.get('name')!r} <color rgba>"
-                out[m.get("name")] = self.floats(color.get("rgba"), 4, what, (1, 1, 1, 1))
+            if m.get("name"):
+                out[m.get("name")] = self.material(m, f"material {m.get('name')!r}")
         return out
+
+    def material(self, m: ET.Element, what: str) -> tuple:
+        """One ``<material>``: its colour and the PNG its ``<texture filename>`` names
+        (other image formats are skipped with a warning: MuJoCo reads PNG)."""
+        color, tex = m.find("color"), m.find("texture")
+        rgba = None
+        if color is not None:
+            rgba = self.floats(color.get("rgba"), 4, f"{what} <color rgba>", (1, 1, 1, 1))
+        texture = None
+        name = tex.get("filename", "") if tex is not None else ""
+        if name:
+            path = Path(name) if Path(name).is_absolute() else self.folder / name
+            if not path.is_file() or path.suffix.lower() != ".png":
+                self.warnings.append(f"skipped {what} texture {name!r} (not a PNG file)")
+            else:
+                texture = path.resolve()
+        return rgba, texture
 
     def geometry(
         self, elem: ET.Element, link: str, kind: str, materials: dict
@@ -244,14 +261,12 @@ class _Parser:
             raise self.fail(f"{what} has unknown geometry <{shape}>")
         if any(s <= 0 for s in size) or any(s == 0 for s in scale):
             raise self.fail(f"{what} <{shape}> must have positive sizes, got {size or scale}")
-        rgba = None
+        rgba = texture = None
         mat = elem.find("material")
         if mat is not None:
-            color = mat.find("color")
-            if color is not None:
-                rgba = self.floats(color.get("rgba"), 4, f"{what} <color rgba>", (1, 1, 1, 1))
-            else:
-                rgba = materials.get(mat.get("name", ""))
+            rgba, texture = self.material(mat, what)
+            if rgba is None and texture is None:
+                rgba, texture = materials.get(mat.get("name", ""), (None, None))
         return GeometryInfo(
             name=elem.get("name", ""),
             shape=shape,
@@ -260,6 +275,7 @@ class _Parser:
             scale=tuple(scale),  # type: ignore[arg-type]
             T_link_geom=self.origin(elem.find("origin"), what),
             rgba=rgba,  # type: ignore[arg-type]
+            texture=texture if shape != "mesh" else None,
         )
 
     def mesh_path(self, filename: str | None, what: str) -> Path:

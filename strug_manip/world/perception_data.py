@@ -330,6 +330,16 @@ def render_episode(
         world.close()
 
 
+def cabinet_style(seed: int, furniture: float) -> str:
+    """The generator style of training cabinet ``seed`` when a share ``furniture`` in
+    [0, 1] of them is drawn in the furniture style (one draw per seed, so a resumed
+    render and a re-render agree)."""
+    if not 0.0 <= furniture <= 1.0:
+        raise ConfigError(f"the furniture share must be in [0, 1], got {furniture!r}")
+    draw = np.random.default_rng([int(seed), 0xF0C]).random()
+    return "furniture" if draw < furniture else "plain"
+
+
 def shard_path(out: Path, seed: int) -> Path:
     """Where the views of cabinet ``seed`` are stored."""
     return Path(out) / f"cabinet_{int(seed):06d}.npz"

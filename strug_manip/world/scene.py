@@ -44,6 +44,7 @@ from strug_manip.objects import (
     load_cabinet_spec,
 )
 from strug_manip.objects.describe import describe_object
+from strug_manip.objects.generator import STYLES
 from strug_manip.robot.fetch import FETCH_SCENE_XML, GRIPPER_JOINTS, HOME_KEYFRAME
 from strug_manip.world.floating_gripper import add_floating_gripper
 
@@ -109,6 +110,8 @@ class SceneConfig:
             ``cabinet_folder``. Not compared or hashed.
         robot: ``fetch`` (the robot) or ``gripper`` (its floating hand alone: the
             skills' planning twin, :mod:`strug_manip.world.floating_gripper`).
+        cabinet_style: the generator's style for ``cabinet_seed`` (``plain`` or
+            ``furniture``, :data:`strug_manip.objects.generator.STYLES`).
     """
 
     cabinet_seed: int = 3
@@ -123,10 +126,13 @@ class SceneConfig:
     height: int = 240
     cabinet_spec: CabinetSpec | None = field(default=None, compare=False)
     robot: str = "fetch"
+    cabinet_style: str = "plain"
 
     def __post_init__(self) -> None:
         if self.robot not in ROBOTS:
             raise UnknownNameError("robot", self.robot, ROBOTS)
+        if self.cabinet_style not in STYLES:
+            raise UnknownNameError("cabinet style", self.cabinet_style, STYLES)
         if self.cabinet_spec is not None:
             if not isinstance(self.cabinet_spec, CabinetSpec):
                 raise ConfigError(
@@ -260,7 +266,9 @@ def build_scene(config: SceneConfig) -> SceneModel:
     else:
         cab_spec = config.cabinet_spec
         if cab_spec is None:
-            cab_spec = generate_cabinet(config.cabinet_seed, kinds=config.cabinet_kinds)
+            cab_spec = generate_cabinet(
+                config.cabinet_seed, kinds=config.cabinet_kinds, style=config.cabinet_style
+            )
         cabinet = load_cabinet_spec(cab_spec)
     spec = mujoco.MjSpec.from_file(str(FETCH_SCENE_XML))
     home = dict(_home_by_name())
