@@ -31,6 +31,9 @@ models the full robot plans in: ``not_applicable``; they spend the episode's ste
 no cause above names them), where the time went (summed over the episodes: the twin,
 rendering predicted clouds, likelihoods, the full robot, perception, set-up) and the
 outcome cache's median hit rate.
+
+``oracle`` is a solver row like the others (STRUG knowing the cabinet: the bound the
+skills set, :mod:`strug_manip.domains.manipulation.oracle`).
 """
 
 from __future__ import annotations
@@ -108,7 +111,7 @@ def report(records: list[dict]) -> str:
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--domains", default="shelf,opendrawer,opendoor")
-    p.add_argument("--solvers", default="random,pomcp,pomcpow,entropy,active,strug")
+    p.add_argument("--solvers", default="random,pomcp,pomcpow,entropy,active,strug,oracle")
     p.add_argument("--seeds", type=seed_range, required=True, help="episode seeds START:STOP")
     p.add_argument("--out", type=Path, required=True)
     p.add_argument("--workers", type=int, default=1)

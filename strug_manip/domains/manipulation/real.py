@@ -12,6 +12,9 @@ episode.
   (:mod:`.conditioning`); the belief is kept, since the next real step plans against
   its likeliest models, and the twins' POMDP gets the next search's
   :class:`.catalogue.Root` (the particle each opening follows, the refused actions).
+
+The oracle (``oracle=True``, :mod:`.oracle`) hands the model the real cabinet as its
+only particle and has that particle take over the real state after every step.
 """
 
 from __future__ import annotations
@@ -39,6 +42,7 @@ from strug_manip.domains.manipulation.catalogue import Root, best_states, repres
 from strug_manip.domains.manipulation.episode_setup import draw_episode, handles
 from strug_manip.domains.manipulation.grounding import first_feasible, handle_point, reward
 from strug_manip.domains.manipulation.model import EpisodeView, ManipulationPOMDP
+from strug_manip.domains.manipulation.oracle import take_over, true_particle
 from strug_manip.domains.manipulation.rules import (
     BEFORE_MOTION,
     CANNOT_START,
@@ -150,6 +154,7 @@ class RealEnvironment:
         objects: real object folders (PartNet-Mobility) to act on instead of generated
             cabinets; the episode's seed draws one.
         views: head-camera views for perception.
+        oracle: the model's belief is the real cabinet (:mod:`.oracle`; evaluation only).
     """
 
     def __init__(
@@ -161,10 +166,11 @@ class RealEnvironment:
         target_link: str | None = None,
         objects: Sequence[Path] = (),
         views: int = 4,
+        oracle: bool = False,
     ) -> None:
         self.model = model
         self.cabinet_seed, self.target, self.target_link = cabinet_seed, target, target_link
-        self.objects, self.views = tuple(objects), views
+        self.objects, self.views, self.oracle = tuple(objects), views, oracle
         self.real: RealEpisode | None = None
         self.state: ManipState | None = None
         #: The belief after the last update, conditioned: what the robot plans against.
@@ -190,8 +196,9 @@ class RealEnvironment:
         clouds = tuple(cabinet_cloud(world, f) for f in frames)
         timers.perception += time.perf_counter() - t0
         pose = look_poses(world, 1)[0]
+        truth = true_particle(world) if self.oracle else None
         self.model.begin(
-            EpisodeView(tuple(frames), clouds, point, home, world.config, pose), timers
+            EpisodeView(tuple(frames), clouds, point, home, world.config, pose, truth), timers
         )
 
     def execute(self, action: Any, rng: np.random.Generator) -> Executed:
@@ -205,7 +212,8 @@ class RealEnvironment:
 
     def condition(self, belief: ParticleBelief) -> ParticleBelief:
         """``belief`` given what the robot knows for certain (:mod:`.conditioning`),
-        kept; the model's :class:`.catalogue.Root` for the next search."""
+        kept; the model's :class:`.catalogue.Root` for the next search. The oracle's
+        particle then takes over the real state (:func:`.oracle.take_over`)."""
         real, w, model = self.real, self.model.worlds, self.model
         if real is None or w is None or all(s.t == 0 for s in belief.states):
             self.belief = belief
@@ -216,6 +224,8 @@ class RealEnvironment:
             belief = conditioning.unmoved(belief, self.belief)
         shut = self.shut_parts()
         self.belief = conditioning.condition(belief, real.world, w, model.parts, shut)
+        if self.oracle:
+            self.belief = take_over(self.belief, real.world, w)
         reps = representatives(model.cat, self.belief, model.root.reps)
         model.root = Root(reps, best_states(self.belief), frozenset(real.refused), real.now)
         return self.belief
