@@ -1,6 +1,9 @@
-"""The oracle solver choice (STRUG on the true cabinet as its only particle)."""
+"""The oracle solver choice (STRUG on the true cabinet as its only particle) and the
+true-hypothesis criterion it shares with the evaluations."""
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 import pytest
@@ -20,9 +23,32 @@ from strug_manip.experiments.task import (
     domain_params,
     solver_config,
 )
+from strug_manip.objects.hypotheses import BelievedJoint, same_joint
 
 #: A drawers-only cabinet whose top drawer the robot opens (``tools/eval_skills.py``).
 SEED = 11
+
+
+def _turned(axis: np.ndarray, deg: float) -> np.ndarray:
+    """``axis`` (a unit z axis here) turned by ``deg`` degrees about x."""
+    a = math.radians(deg)
+    return np.array([0.0, -math.sin(a), math.cos(a)]) * axis[2]
+
+
+def test_same_joint_is_the_type_the_axis_within_10_deg_and_the_hinge_within_5_cm():
+    true = BelievedJoint("revolute", [0.0, 0.0, 1.0], [1.0, 0.2, 0.8])
+    z = np.array([0.0, 0.0, 1.0])
+    assert same_joint(BelievedJoint("revolute", _turned(z, 9.0), true.origin), true)
+    assert not same_joint(BelievedJoint("revolute", _turned(z, 11.0), true.origin), true)
+    assert not same_joint(BelievedJoint("revolute", -z, true.origin), true)  # other side
+    # Along the hinge line is the same hinge; across it, 4 cm is, 6 cm is not.
+    assert same_joint(BelievedJoint("revolute", z, np.add(true.origin, [0.0, 0.0, 0.3])), true)
+    assert same_joint(BelievedJoint("revolute", z, np.add(true.origin, [0.04, 0.0, 0.0])), true)
+    assert not same_joint(BelievedJoint("revolute", z, np.add(true.origin, [0.0, 0.06, 0.0])), true)
+    drawer = BelievedJoint("prismatic", [-1.0, 0.0, 0.0], [1.0, 0.0, 0.8])
+    assert not same_joint(BelievedJoint("revolute", [-1.0, 0.0, 0.0], drawer.origin), drawer)
+    assert same_joint(BelievedJoint("prismatic", [-1.0, 0.0, 0.0], [1.0, 0.0, 0.84]), drawer)
+    assert not same_joint(BelievedJoint("prismatic", [-1.0, 0.0, 0.0], [1.3, 0.0, 0.8]), drawer)
 
 
 def test_the_oracle_is_strug_on_the_manipulation_tasks_only(capsys):
@@ -81,6 +107,7 @@ def test_the_oracle_believes_the_real_cabinet_and_takes_over_its_state():
         assert np.allclose(tw.world.cabinet_pose(), real.cabinet_pose(), atol=1e-9)
         assert tw.world.part_positions() == pytest.approx(real.part_positions(), abs=1e-9)
         assert took.states[0].last == s.state.last  # the twin's own key is kept
+        assert env.health is not None and env.health.steps[0].target_before == 1.0
         if not obs.key[1]:  # the hand is empty: the object is where the real one is
             assert np.allclose(tw.world.object_pose(), real.object_pose(), atol=1e-9)
     finally:
@@ -98,4 +125,5 @@ def test_an_oracle_episode_runs_with_one_particle():
     finally:
         d.close()
     assert len(res.steps) == 1
-    assert report["real"] and report["time"]["perception"] < 1.0
+    assert report["health"]["initial"] == {"weight": 1.0, "models": 1}
+    assert [s["planned_true"] for s in report["health"]["steps"]] == [True]

@@ -26,7 +26,7 @@ from strug_manip.domains import (
     MANIPULATION_SIMS,
     make_domain,
 )
-from strug_manip.experiments.episode import run_episode
+from strug_manip.experiments.episode import EpisodeResult, run_episode
 
 #: The oracle: STRUG's planner on the true model (module docstring).
 ORACLE = "oracle"
@@ -112,6 +112,13 @@ def run_task(
     result = run_episode(
         pomdp, solver_config(solver, budget_for(domain, overrides)), seed, n_particles=n_particles
     )
+    return episode_record(task, pomdp, result)
+
+
+def episode_record(task: tuple[str, str, int], pomdp: Any, result: EpisodeResult) -> dict:
+    """The result record of ``task``'s finished episode ``result`` in ``pomdp``
+    (:func:`run_task`'s); a manipulation task's report is taken and its worlds freed."""
+    domain, solver, seed = task
     plan = [s.plan_seconds for s in result.steps]
     rec = {
         "domain": domain,

@@ -14,7 +14,9 @@ episode.
   :class:`.catalogue.Root` (the particle each opening follows, the refused actions).
 
 The oracle (``oracle=True``, :mod:`.oracle`) hands the model the real cabinet as its
-only particle and has that particle take over the real state after every step.
+only particle and has that particle take over the real state after every step. Every
+episode records its belief's health against the true cabinet (:mod:`.health`; the
+report's ``health``), reading only what the episode computes anyway.
 """
 
 from __future__ import annotations
@@ -41,6 +43,7 @@ from strug_manip.domains.manipulation.actions import SAME_PART, TABLE, ManipActi
 from strug_manip.domains.manipulation.catalogue import Root, best_states, representatives
 from strug_manip.domains.manipulation.episode_setup import draw_episode, handles
 from strug_manip.domains.manipulation.grounding import first_feasible, handle_point, reward
+from strug_manip.domains.manipulation.health import HealthRecorder, RealStep
 from strug_manip.domains.manipulation.model import EpisodeView, ManipulationPOMDP
 from strug_manip.domains.manipulation.oracle import take_over, true_particle
 from strug_manip.domains.manipulation.rules import (
@@ -175,6 +178,8 @@ class RealEnvironment:
         self.state: ManipState | None = None
         #: The belief after the last update, conditioned: what the robot plans against.
         self.belief: ParticleBelief | None = None
+        #: The episode's belief health against the true cabinet (:mod:`.health`).
+        self.health: HealthRecorder | None = None
 
     # --- the Environment protocol ------------------------------------------------------
     def reset(self, rng: np.random.Generator) -> None:
@@ -219,6 +224,8 @@ class RealEnvironment:
             self.belief = belief
             refused = frozenset(real.refused) if real is not None else frozenset()
             model.root = Root(model.root.reps, best_states(belief), refused, 0)
+            if real is not None and w is not None:
+                self.health = self._health(belief)
             return belief
         if real.still:
             belief = conditioning.unmoved(belief, self.belief)
@@ -226,6 +233,8 @@ class RealEnvironment:
         self.belief = conditioning.condition(belief, real.world, w, model.parts, shut)
         if self.oracle:
             self.belief = take_over(self.belief, real.world, w)
+        if self.health is not None:
+            self.health.updated(self.belief)
         reps = representatives(model.cat, self.belief, model.root.reps)
         model.root = Root(reps, best_states(self.belief), frozenset(real.refused), real.now)
         return self.belief
@@ -239,9 +248,9 @@ class RealEnvironment:
         link = functools.partial(self.real_link, a.part)
         before = handle_point(world, a, link)
         seed = int(rng.integers(2**31))
-        out, tried = None, 0
+        out, tried, planned = None, 0, -1
         for i, state in self.plan_models(a, rng):
-            tried += 1
+            tried, planned = tried + 1, i
             world.restore(s.sim)  # a stop before motion may still have stepped it
             candidates, plan_world = model.skills(i, a, state, holder=i)
             if plan_world is None or a.skill == "Pick":
@@ -280,8 +289,21 @@ class RealEnvironment:
         news, real.weighed = scene != real.weighed, scene
         model.timers.real += time.perf_counter() - t0
         obs = ManipObservation(observation_key(status, holding, motion), cloud, summary, news)
+        if self.health is not None and self.belief is not None:
+            name = model.action_space().name(a)
+            done_step = RealStep(s.t, a, name, planned, obs.key, r, news, model.root.rep(a))
+            self.health.record(self.belief, done_step)
         done = r != 0.0 or s.t + 1 >= model.max_steps
         return Step(ManipState(REAL, world.snapshot(), s.t + 1, obs.key), obs, r, done)
+
+    def _health(self, initial: ParticleBelief) -> HealthRecorder:
+        """A new episode's belief-health recorder, from its initial belief."""
+        real, model = self._need_real(), self.model
+        return HealthRecorder(
+            model.cat, model.need_worlds(), real.world.scene.cabinet_spec,
+            real.world.scene.T_world_cabinet, real.target,
+            self.real_link, model.max_steps, initial,
+        )  # fmt: skip
 
     def plan_models(self, a: ManipAction, rng: np.random.Generator) -> list[tuple[int, WorldState]]:
         """The models the real robot plans ``a`` against, in the order it tries them
@@ -353,18 +375,19 @@ class RealEnvironment:
         status`` per step that ran one, named as in :attr:`RealEpisode.labels`)."""
         if self.real is None:
             return {}
-        return {
+        out = {
             "cabinet_seed": self.real.seed,
             "cabinet": self.real.world.scene.cabinet_spec.name,
             "real": [f"{k} {o.status}" for k, o in zip(self.real.labels, self.real.outcomes,
                      strict=True)],
         }  # fmt: skip
+        return out if self.health is None else {**out, "health": self.health.as_dict()}
 
     def close(self) -> None:
         """Free the real world (the model frees its own: its ``close``)."""
         if self.real is not None:
             self.real.world.close()
-        self.real, self.belief, self.state = None, None, None
+        self.real, self.belief, self.state, self.health = None, None, None, None
 
     def _need_real(self) -> RealEpisode:
         if self.real is None:
