@@ -9,6 +9,7 @@ Examples:
         --out runs/table1 --workers 2
     strug bench ... --executor ray                 # the same sweep as Ray tasks
     strug run --domain my_module:MyPOMDP --solver pomcpow   # your own GenerativePOMDP
+    strug run --domain opendoor --solver oracle --seed 9100  # STRUG knowing the cabinet
     strug scene --seed 3 --out scene.png
     strug demo
 
@@ -28,7 +29,6 @@ from pathlib import Path
 from typing import Any
 
 from planners.errors import ConfigError, PlannersError, UnknownNameError
-from planners.solvers import SOLVERS
 from strug_manip.cli_args import (
     Parser,
     nonnegative_int,
@@ -43,7 +43,7 @@ from strug_manip.experiments.bench import RESULTS, BenchSpec, load_results, run_
 from strug_manip.experiments.episode import DEFAULT_PARTICLES, StepRecord, run_episode
 from strug_manip.experiments.executors import EXECUTORS
 from strug_manip.experiments.table import to_markdown
-from strug_manip.experiments.task import budget_for, solver_config
+from strug_manip.experiments.task import SOLVER_NAMES, budget_for, domain_params, solver_config
 from strug_manip.objects.loader import object_folders
 
 #: The demo: a short Table I run of the toy domains.
@@ -65,6 +65,7 @@ SOLVER_SUMMARIES: dict[str, str] = {
     "entropy": "Entropy Regularized: belief-tree search paying beta per nat of entropy reduced",
     "active": "Active Learning: reduce entropy below a threshold, then plan in the MAP model",
     "strug": "STRUG: belief-tree search paying beta per unit of task-relevant uncertainty reduced",
+    "oracle": "STRUG given the true cabinet as its only particle (manipulation tasks; a bound)",
 }
 
 
@@ -122,7 +123,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     run = sub.add_parser("run", help="run one episode and print every step")
     run.add_argument("--domain", required=True, help=domains)
-    run.add_argument("--solver", required=True, help=f"one of {', '.join(SOLVERS)}")
+    run.add_argument("--solver", required=True, help=f"one of {', '.join(SOLVER_NAMES)}")
     run.add_argument("--seed", type=nonnegative_int, default=0, help="episode seed (default 0)")
     run.add_argument("--json", action="store_true", help="one JSON object per line per step")
     run.add_argument(
@@ -145,7 +146,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     bench = sub.add_parser("bench", help="run a Table I grid of episodes, resumable")
     bench.add_argument("--domains", required=True, help=f"comma-separated: {domains}")
-    bench.add_argument("--solvers", required=True, help="comma-separated solver names")
+    bench.add_argument(
+        "--solvers", required=True, help=f"comma-separated: {', '.join(SOLVER_NAMES)}"
+    )
     bench.add_argument("--seeds", type=positive_int, required=True, help="N seeds per cell")
     bench.add_argument(
         "--first-seed",
@@ -219,7 +222,7 @@ def cmd_list(args: argparse.Namespace) -> int:
         print(f"  {name:<14} {DOMAIN_SUMMARIES[name]}")
     print("  package.module:Class  your own GenerativePOMDP subclass, built without arguments")
     print("solvers:")
-    for name in SOLVERS:
+    for name in SOLVER_NAMES:
         print(f"  {name:<14} {SOLVER_SUMMARIES[name]}")
     return 0
 
@@ -266,7 +269,9 @@ def cmd_run(args: argparse.Namespace) -> int:
         output_file(args.rerun, "--rerun", (".rrd",))
     overrides = _overrides(args)
     BenchSpec((args.domain,), (args.solver,), 1, overrides, args.particles)  # validates
-    pomdp = make_domain(args.domain, **_object_params(args))
+    pomdp = make_domain(
+        args.domain, **_object_params(args), **domain_params(args.domain, args.solver)
+    )
     config = solver_config(args.solver, budget_for(args.domain, overrides))
     if not args.json:
         print(f"{args.domain} / {args.solver} / seed {args.seed}: {describe_config(config, pomdp)}")

@@ -31,23 +31,54 @@ models the full robot plans in: ``not_applicable``; they spend the episode's ste
 no cause above names them), where the time went (summed over the episodes: the twin,
 rendering predicted clouds, likelihoods, the full robot, perception, set-up) and the
 outcome cache's median hit rate.
+
+Then the **belief health** (recorded during each episode against the true cabinet, the
+report's ``health``: :mod:`strug_manip.domains.manipulation.health`): how often the
+initial belief held the true hypothesis of the target part and lost it, and the failures
+decomposed into causes a user can act on, per episode the first of (:func:`health_flags`):
+
+* ``true hypothesis missing from the initial belief``: no particle's target part has the
+  real target's joint (type, axis within 10 deg, hinge or origin within 5 cm);
+* ``belief dropped the true hypothesis``: after a step its weight fell below 1 %
+  (:data:`~strug_manip.domains.manipulation.health.LOST_WEIGHT`), named by the skill and
+  the key that did it: the real status against the one the twin of the best true
+  particle predicted, the motion where only it differed, or the cloud where the keys
+  agreed (each such step is listed with both keys);
+* ``skill failed under the right hypothesis``: a real skill planned in a model holding
+  the true hypothesis of the part it acted on ended other than ``ok``, or dragged;
+* ``same action repeated without news``: an action chosen again right after it ended
+  with the same key and the cabinet unchanged;
+* ``out of steps``: none of these, the episode used all its steps;
+* ``other: <cause>``: none of these either (the cause above).
+
+``oracle`` is a solver row like the others (STRUG knowing the cabinet: the bound the
+skills set, :mod:`strug_manip.domains.manipulation.oracle`).
 """
 
 from __future__ import annotations
 
 import argparse
 import collections
+import itertools
 import json
 import statistics
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 from strug_manip.domains import MANIPULATION_DOMAINS
+from strug_manip.domains.manipulation import health
 from strug_manip.experiments.bench import BenchSpec, load_results, run_bench, success_table
 from strug_manip.experiments.seeds import seed_range
 
 #: The report's time components, in the order printed.
 TIME_PARTS = ("twin", "render", "likelihood", "real", "perception", "setup")
+#: The belief-health causes, in the order an episode's is looked for.
+MISSING = "true hypothesis missing from the initial belief"
+DROPPED = "belief dropped the true hypothesis"
+SKILL_FAILED = "skill failed under the right hypothesis"
+REPEATED = "same action repeated without news"
+OUT_OF_STEPS = "out of steps"
 
 
 def cause(record: dict) -> str:
@@ -60,6 +91,113 @@ def cause(record: dict) -> str:
     if any(r == "Place ok" for r in real):
         return "placed elsewhere"
     return f"out of steps after {real[-1]}" if real else "nothing ran"
+
+
+def _skill(action: str) -> str:
+    """The skill of a step's action name (``Place(table)`` kept whole)."""
+    return action if action == "Place(table)" else action.split("(")[0]
+
+
+def _key(key: list[float] | None) -> str:
+    """An observation key for people: ``ok, held, (+1, +0, -2)`` (motion in 5 cm bins)."""
+    if key is None:
+        return "none"
+    motion = ", ".join(f"{int(v):+d}" for v in key[2:])
+    return f"{health.status_of(key)}, {'held' if key[1] else 'empty'}, ({motion})"
+
+
+def drop_key(step: dict) -> str:
+    """Which key dropped the true hypothesis at ``step`` (a health step record): the
+    real status against the twin's, the motion or the grip where only it differed, or
+    the cloud where the keys agreed."""
+    real, twin = step["real_key"], step["twin_key"]
+    if twin is None:
+        return f"real {step['real_status']}, no twin key"
+    if step["real_status"] != step["twin_status"]:
+        return f"real {step['real_status']} vs twin {step['twin_status']}"
+    if real[1] != twin[1]:
+        return f"{step['real_status']}, the grip differs from the twin's"
+    if list(real[2:]) != list(twin[2:]):
+        return f"{step['real_status']}, the motion differs from the twin's"
+    return f"{step['real_status']}, the cloud (keys agreed)"
+
+
+def health_flags(record: dict) -> list[str]:
+    """Every belief-health cause (module docstring) that a failed episode shows, in
+    order; [] for a success or a record without health."""
+    h = record["report"].get("health")
+    if record["success"] or h is None:
+        return []
+    steps, out = h["steps"], []
+    if h["initial"]["models"] == 0:
+        out.append(MISSING)
+    lost = next((s for s in steps if s["step"] == h["lost_at"]), None)
+    if lost is not None:
+        out.append(f"{DROPPED}: {_skill(lost['action'])} {drop_key(lost)}")
+    failed = [s for s in steps if s["planned_true"]
+              and (s["real_status"] != "ok" or s["reward"] < 0)]  # fmt: skip
+    if failed:
+        s = failed[0]
+        out.append(f"{SKILL_FAILED}: {_skill(s['action'])} "
+                   f"{'dragged' if s['reward'] < 0 else s['real_status']}")  # fmt: skip
+    again = [b for a, b in itertools.pairwise(steps) if a["action"] == b["action"]
+             and not a["news"] and a["real_key"] == b["real_key"]]  # fmt: skip
+    if again:
+        out.append(f"{REPEATED}: {_skill(again[0]['action'])}")
+    if len(steps) >= h["max_steps"]:
+        out.append(OUT_OF_STEPS)
+    return out
+
+
+def health_cause(record: dict) -> str:
+    """The belief-health cause of an episode's failure (the first of
+    :func:`health_flags`; ``success``; ``no belief health recorded``)."""
+    if record["success"]:
+        return "success"
+    if "health" not in record["report"]:
+        return "no belief health recorded"
+    flags = health_flags(record)
+    return flags[0] if flags else f"other: {cause(record)}"
+
+
+def _by_cause(failed: list[dict], why: Callable[[dict], str]) -> list[str]:
+    """Count lines, most common first: ``   n  cause (solver k, ...)``."""
+    causes = collections.Counter(why(r) for r in failed)
+    by = collections.Counter((why(r), r["solver"]) for r in failed)
+    lines = []
+    for c, n in causes.most_common():
+        who = {s: k for (c2, s), k in by.items() if c2 == c}
+        lines.append(f"  {n:4d}  {c} ({', '.join(f'{s} {k}' for s, k in sorted(who.items()))})")
+    return lines
+
+
+def health_report(records: list[dict]) -> list[str]:
+    """The belief-health lines of one domain's records (module docstring)."""
+    rs = [r for r in records if "health" in r["report"]]
+    if not rs:
+        return ["  belief health: not recorded (records written before it was)"]
+    hs = [r["report"]["health"] for r in rs]
+    held = sum(h["initial"]["models"] > 0 for h in hs)
+    lost = sum(h["lost_at"] is not None for h in hs)
+    failed = [r for r in rs if not r["success"]]
+    lines = [
+        f"  belief health: the true target hypothesis was in the initial belief in "
+        f"{held} of {len(rs)} episodes, lost after a step in {lost}",
+        f"  failures by belief-health cause ({len(failed)} of {len(rs)} episodes)",
+    ]
+    lines += _by_cause(failed, health_cause)
+    shown = collections.Counter(f.split(":")[0] for r in failed for f in health_flags(r))
+    if shown:
+        lines.append("  shown by failed episodes (not exclusive): "
+                     + ", ".join(f"{c} {n}" for c, n in shown.most_common()))  # fmt: skip
+    for r in failed:
+        h = r["report"]["health"]
+        step = next((s for s in h["steps"] if s["step"] == h["lost_at"]), None)
+        if step is not None:
+            lines.append(f"    dropped: seed {r['seed']} {r['solver']} step {step['step']} "
+                         f"{step['action']}: real {_key(step['real_key'])}; "
+                         f"twin {_key(step['twin_key'])}")  # fmt: skip
+    return lines
 
 
 def idle_steps(records: list[dict]) -> str:
@@ -88,12 +226,8 @@ def report(records: list[dict]) -> str:
     for d in sorted({r["domain"] for r in records}):
         rs = [r for r in records if r["domain"] == d]
         failed = [r for r in rs if not r["success"]]
-        causes = collections.Counter(cause(r) for r in failed)
-        lines.append(f"\n{d}: failures by cause ({sum(causes.values())} of {len(rs)} episodes)")
-        by = collections.Counter((cause(r), r["solver"]) for r in failed)
-        for c, n in causes.most_common():
-            who = {s: k for (c2, s), k in by.items() if c2 == c}
-            lines.append(f"  {n:4d}  {c} ({', '.join(f'{s} {k}' for s, k in sorted(who.items()))})")
+        lines.append(f"\n{d}: failures by cause ({len(failed)} of {len(rs)} episodes)")
+        lines += _by_cause(failed, cause)
         lines.append("  " + idle_steps(rs))
         total = {k: sum(r["report"]["time"].get(k, 0.0) for r in rs) for k in TIME_PARTS}
         t = sum(total.values()) or 1.0
@@ -102,13 +236,14 @@ def report(records: list[dict]) -> str:
                 if "outcome_cache" in r["report"]]  # fmt: skip
         hit = f"{statistics.median(hits):.0%}" if hits else "n/a"
         lines.append(f"  time: {parts} (of {t:.0f} s); outcome cache hit rate median {hit}")
+        lines += health_report(rs)
     return "\n".join(lines)
 
 
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--domains", default="shelf,opendrawer,opendoor")
-    p.add_argument("--solvers", default="random,pomcp,pomcpow,entropy,active,strug")
+    p.add_argument("--solvers", default="random,pomcp,pomcpow,entropy,active,strug,oracle")
     p.add_argument("--seeds", type=seed_range, required=True, help="episode seeds START:STOP")
     p.add_argument("--out", type=Path, required=True)
     p.add_argument("--workers", type=int, default=1)

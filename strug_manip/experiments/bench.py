@@ -29,7 +29,7 @@ from strug_manip.domains import (
 from strug_manip.experiments.episode import DEFAULT_PARTICLES
 from strug_manip.experiments.executors import EXECUTORS, run_local, run_ray
 from strug_manip.experiments.table import summarize, to_markdown, write_csv, write_png
-from strug_manip.experiments.task import run_task, solver_config
+from strug_manip.experiments.task import check_solver, planner_of, run_task, solver_config
 from strug_manip.objects.loader import object_folders
 
 RESULTS = "results.jsonl"
@@ -42,7 +42,8 @@ class BenchSpec:
 
     Attributes:
         domains: canonical domain names, or ``package.module:Class`` for a user's own.
-        solvers: canonical solver names.
+        solvers: solver names (:data:`~strug_manip.experiments.task.SOLVER_NAMES`: the
+            planners', and ``oracle`` on the manipulation tasks).
         seeds: number of seeds; seeds are ``first_seed`` .. ``first_seed + seeds - 1``.
         overrides: solver config fields set for every solver that has them
             (e.g. ``{"sims": 2000}``); a field no chosen solver has is an error.
@@ -68,8 +69,8 @@ class BenchSpec:
         for d in self.domains:
             domain_class(d)
         for s in self.solvers:
-            if s not in SOLVERS:
-                raise UnknownNameError("solver", s, list(SOLVERS))
+            for d in self.domains:
+                check_solver(d, s)
         check_positive_int("seeds", self.seeds)
         check_positive_int("n_particles", self.n_particles)
         check_positive_int("first_seed", self.first_seed, allow_zero=True)
@@ -77,7 +78,7 @@ class BenchSpec:
             object_folders(o)  # names a missing folder now, not in a worker
         for s in self.solvers:  # validate every config once, up front
             solver_config(s, self.overrides)
-        fields = {f for s in self.solvers for f in SOLVERS[s].field_names()}
+        fields = {f for s in self.solvers for f in SOLVERS[planner_of(s)].field_names()}
         for key in self.overrides:
             if key not in fields:
                 raise UnknownNameError("solver config field", key, sorted(fields))

@@ -3,6 +3,14 @@
 What the driver (:mod:`strug_manip.experiments.bench`) and its workers
 (:mod:`strug_manip.experiments.executors`) both call: the solver's config with the
 run's overrides, the manipulation tasks' default budget, and the episode itself.
+
+The solver names the runner takes (:data:`SOLVER_NAMES`) are the planners'
+(:data:`planners.solvers.SOLVERS`) and :data:`ORACLE`, a choice of *belief* with
+STRUG's planner: the manipulation task is built with the true cabinet as its only
+particle (``belief="true"``, :mod:`strug_manip.domains.manipulation.oracle`), while the
+solver config, its overrides and the budget are STRUG's own. The toy domains have no
+perception to replace, and a user's own domain no true model to hand over: the runner
+refuses the oracle there (:func:`check_solver`).
 """
 
 from __future__ import annotations
@@ -10,6 +18,7 @@ from __future__ import annotations
 import statistics
 from typing import Any
 
+from planners.errors import ConfigError, UnknownNameError
 from planners.solvers import SOLVERS, make_solver
 from strug_manip.domains import (
     MANIPULATION_DOMAINS,
@@ -17,13 +26,56 @@ from strug_manip.domains import (
     MANIPULATION_SIMS,
     make_domain,
 )
-from strug_manip.experiments.episode import run_episode
+from strug_manip.experiments.episode import EpisodeResult, run_episode
+
+#: The oracle: STRUG's planner on the true model (module docstring).
+ORACLE = "oracle"
+#: The planner the oracle runs.
+ORACLE_PLANNER = "strug"
+#: Every solver name the runner takes, in the rows' order: the planners', then the oracle.
+SOLVER_NAMES: tuple[str, ...] = (*SOLVERS, ORACLE)
+
+
+def planner_of(solver: str) -> str:
+    """The planner (a key of :data:`~planners.solvers.SOLVERS`) that ``solver`` runs.
+
+    Raises:
+        UnknownNameError: ``solver`` is none of :data:`SOLVER_NAMES`.
+    """
+    if solver == ORACLE:
+        return ORACLE_PLANNER
+    if solver not in SOLVERS:
+        raise UnknownNameError("solver", solver, list(SOLVER_NAMES))
+    return solver
+
+
+def check_solver(domain: str, solver: str) -> None:
+    """Refuse a solver the domain cannot run: the oracle outside the manipulation tasks.
+
+    Raises:
+        UnknownNameError: ``solver`` is none of :data:`SOLVER_NAMES`.
+        ConfigError: the oracle on a domain that is no manipulation task.
+    """
+    planner_of(solver)
+    if solver == ORACLE and domain not in MANIPULATION_DOMAINS:
+        raise ConfigError(
+            f"solver {ORACLE!r} (STRUG given the true cabinet as its only particle) applies "
+            f"to the manipulation domains ({', '.join(MANIPULATION_DOMAINS)}), not {domain!r}"
+        )
+
+
+def domain_params(domain: str, solver: str) -> dict[str, Any]:
+    """The domain parameters ``solver`` asks for: the oracle's ``belief="true"``."""
+    check_solver(domain, solver)
+    return {"belief": "true"} if solver == ORACLE else {}
 
 
 def solver_config(solver: str, overrides: dict[str, Any]) -> Any:
-    """The config of ``solver`` with the overrides it has a field for."""
-    fields = SOLVERS[solver].field_names()
-    return make_solver(solver, {k: v for k, v in overrides.items() if k in fields})
+    """The config of ``solver`` (the oracle: STRUG's) with the overrides it has a field
+    for."""
+    planner = planner_of(solver)
+    fields = SOLVERS[planner].field_names()
+    return make_solver(planner, {k: v for k, v in overrides.items() if k in fields})
 
 
 def budget_for(domain: str, overrides: dict[str, Any]) -> dict[str, Any]:
@@ -55,10 +107,18 @@ def run_task(
     manipulation tasks act on (:attr:`~strug_manip.experiments.bench.BenchSpec.objects`)."""
     domain, solver, seed = task
     on_objects = bool(objects) and domain in MANIPULATION_DOMAINS
-    pomdp = make_domain(domain, objects=objects) if on_objects else make_domain(domain)
+    params = {"objects": objects} if on_objects else {}
+    pomdp = make_domain(domain, **params, **domain_params(domain, solver))
     result = run_episode(
         pomdp, solver_config(solver, budget_for(domain, overrides)), seed, n_particles=n_particles
     )
+    return episode_record(task, pomdp, result)
+
+
+def episode_record(task: tuple[str, str, int], pomdp: Any, result: EpisodeResult) -> dict:
+    """The result record of ``task``'s finished episode ``result`` in ``pomdp``
+    (:func:`run_task`'s); a manipulation task's report is taken and its worlds freed."""
+    domain, solver, seed = task
     plan = [s.plan_seconds for s in result.steps]
     rec = {
         "domain": domain,

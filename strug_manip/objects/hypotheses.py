@@ -124,6 +124,54 @@ class BelievedJoint:
         )
 
 
+#: A believed joint counts as the true one (:func:`same_joint`) with its axis within this
+#: angle of the true axis [deg] ...
+TRUE_AXIS_DEG = 10.0
+#: ... and the true hinge point within this distance of the believed hinge line (a
+#: revolute joint), or the origins within it (a prismatic one) [m].
+TRUE_OFFSET = 0.05
+
+
+def same_joint(
+    believed: BelievedJoint,
+    true: BelievedJoint,
+    max_angle_deg: float = TRUE_AXIS_DEG,
+    max_offset: float = TRUE_OFFSET,
+) -> bool:
+    """Whether ``believed`` is the ``true`` joint as the evaluations count a true
+    hypothesis (``true_in_support`` of ``tools/eval_perception.py``, the belief health of
+    ``tools/eval_manipulation.py``): the same type, the axes within ``max_angle_deg``
+    [deg] (signed: a door believed hinged on the wrong side is 180 deg off), and the
+    true joint's origin within ``max_offset`` [m] of the believed hinge line (revolute)
+    or of the believed origin (prismatic). Both joints in one frame (e.g. the world's)."""
+    if believed.type != true.type:
+        return False
+    cos = float(np.clip(believed.axis @ true.axis, -1.0, 1.0))
+    if math.degrees(math.acos(cos)) > max_angle_deg:
+        return False
+    r = true.origin - believed.origin
+    if believed.type == "revolute":
+        r = r - (r @ believed.axis) * believed.axis
+    return float(np.linalg.norm(r)) <= max_offset
+
+
+def true_hypothesis(
+    part: PartSpec, T_world_object: np.ndarray, truth: PartSpec, T_world_truth: np.ndarray
+) -> bool:
+    """Whether ``part`` of a believed cabinet standing at ``T_world_object`` (4, 4) holds
+    the true hypothesis of the real part ``truth`` (its cabinet at ``T_world_truth``):
+    for a movable real part, :func:`same_joint` of the two joints in the world frame;
+    for a fixed one (an open cell), a fixed part of the same kind."""
+    if not truth.movable:
+        return not part.movable and part.kind == truth.kind
+    if not part.movable:
+        return False
+    return same_joint(
+        BelievedJoint.of_part(part, 0.0, T_world_object),
+        BelievedJoint.of_part(truth, 0.0, T_world_truth),
+    )
+
+
 #: Joint limit of a part whose believed joint type differs from the spec's and whose
 #: believed travel is unbounded: prismatic [m], revolute [rad].
 BELIEVED_PRISMATIC_UPPER = 0.5

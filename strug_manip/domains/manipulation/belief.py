@@ -149,7 +149,8 @@ class Particle:
     """One complete cabinet model.
 
     Attributes:
-        model: the cabinet as believed (front frame).
+        model: the cabinet as believed (front frame); None for the real cabinet as the
+            oracle's particle (:func:`.oracle.true_particle`), which perception did not make.
         spec: its compiled description (``ManipulationWorld.from_cabinet_spec``).
         q: its parts' current joint positions ``{joint name: q}``.
         source: per part of ``spec`` (in order), the index of the fused hypothesis it
@@ -157,7 +158,7 @@ class Particle:
         run: which perception run (0 clean, then the noisy ones) it was drawn from.
     """
 
-    model: CabinetModel
+    model: CabinetModel | None
     spec: CabinetSpec
     q: dict[str, float]
     source: tuple[int, ...]
@@ -433,8 +434,10 @@ def with_open_cell(
 ) -> Particle:
     """``particle`` with the open cell at ``point`` (:func:`open_cell`) and the board
     above it added, unless one of its parts covers the point already (it then believes
-    something is there)."""
+    something is there; the real cabinet, ``model`` None, has its cells)."""
     m = particle.model
+    if m is None:
+        return particle
     T = np.linalg.inv(np.asarray(m.T_world_front, dtype=float))
     _, y, z = T[:3, :3] @ np.asarray(point, dtype=float) + T[:3, 3]
     if any(p.rect[0] <= y <= p.rect[1] and p.rect[2] <= z <= p.rect[3] for p in m.parts):

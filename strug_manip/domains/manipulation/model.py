@@ -7,8 +7,9 @@ the two together.
    model what the head camera saw from :data:`VIEWS` poses (:class:`EpisodeView`:
    frames, the point naming the target, where the object rests, the scene's layout).
 2. ``initial_belief``: perception turns those renders into particles (:mod:`.belief`),
-   never reading the true cabinet; their parts are catalogued by where they are
-   (:mod:`.catalogue`) and the episode's action list made.
+   never reading the true cabinet (but for the oracle, :mod:`.oracle`, whose only
+   particle is the true cabinet the environment hands over); their parts are
+   catalogued by where they are (:mod:`.catalogue`) and the episode's action list made.
 3. ``step`` on a particle runs the skill on that particle's planning twin
    (:mod:`.worlds`, cached; the skills of an action: :mod:`.grounding`). What a search
    takes from the current real step (the particle each opening follows, the refused
@@ -111,6 +112,9 @@ class EpisodeView:
             back there).
         config: the scene (the table, the object and where the cabinet stands).
         look_pose: the head pose the real clouds after each step are taken from.
+        truth: the real cabinet as a particle, handed over for the oracle alone
+            (:mod:`.oracle`: the initial belief is this particle instead of
+            perception's); None for every robot that perceives.
     """
 
     frames: tuple[CameraFrame, ...]
@@ -119,6 +123,7 @@ class EpisodeView:
     home: np.ndarray
     config: SceneConfig
     look_pose: LookPose
+    truth: belief_mod.Particle | None = None
 
 
 class ManipulationPOMDP(GenerativePOMDP):
@@ -183,22 +188,11 @@ class ManipulationPOMDP(GenerativePOMDP):
         self.view, self.timers = view, timers
 
     def initial_belief(self, rng: np.random.Generator, n_particles: int) -> ParticleBelief:
-        """Particles from perception on the head camera's views (:meth:`begin`)."""
+        """Particles from perception on the head camera's views (:meth:`begin`); the
+        oracle's: the true cabinet alone (:attr:`EpisodeView.truth`)."""
         view = self._need_view()
-        t0 = time.perf_counter()
-        if self._perceiver is None:
-            self._perceiver = Perceiver()
         c = view.config
-        cfg = belief_mod.BeliefConfig(particles=min(n_particles, self.particles))
-        scene = (c.cabinet_distance, c.cabinet_lateral, c.stand_height)
-        particles = belief_mod.initial_belief(
-            [(f.rgb, f.depth, f.T_world_camera, f.fovy) for f in view.frames],
-            self._perceiver, rng, cfg, scene=scene,
-        )  # fmt: skip
-        if self.task == "shelf":  # the network finds no open cells: read them off the cloud
-            particles = [belief_mod.with_open_cell(p, view.point, list(view.clouds), scene)
-                         for p in particles]  # fmt: skip
-        self.timers.perception += time.perf_counter() - t0
+        particles = [view.truth] if view.truth is not None else self._perceive(rng, n_particles)
         t0 = time.perf_counter()
         if self.worlds is not None:
             self.worlds.close()
@@ -210,6 +204,16 @@ class ManipulationPOMDP(GenerativePOMDP):
         belief = ParticleBelief.from_states([ManipState(i, w.initial[i], 0) for i in range(len(w))])
         self.root = Root(reps=tuple(part.holders for part in parts), best=best_states(belief))
         return belief
+
+    def _perceive(self, rng: np.random.Generator, n_particles: int) -> list[belief_mod.Particle]:
+        """Perception's particles from the head camera's views (:func:`perceive`)."""
+        t0 = time.perf_counter()
+        if self._perceiver is None:
+            self._perceiver = Perceiver()
+        m = min(n_particles, self.particles)
+        out = perceive(self._need_view(), self._perceiver, self.task, m, rng)
+        self.timers.perception += time.perf_counter() - t0
+        return out
 
     def sample_initial_state(self, rng: np.random.Generator) -> ManipState:
         """A particle of b0 (the model's own states are its particles; the real
@@ -508,6 +512,23 @@ class ManipulationPOMDP(GenerativePOMDP):
         if self.worlds is None:
             raise ConfigError(f"{self.name}: no belief yet (call initial_belief first)")
         return self.worlds
+
+
+def perceive(
+    view: EpisodeView, perceiver: Perceiver, task: str, particles: int, rng: np.random.Generator
+) -> list[belief_mod.Particle]:
+    """``particles`` particles from perception on ``view``'s frames (:mod:`.belief`);
+    on Shelf each with the open cell at the target point read off the clouds."""
+    c = view.config
+    cfg = belief_mod.BeliefConfig(particles=particles)
+    scene = (c.cabinet_distance, c.cabinet_lateral, c.stand_height)
+    out = belief_mod.initial_belief(
+        [(f.rgb, f.depth, f.T_world_camera, f.fovy) for f in view.frames],
+        perceiver, rng, cfg, scene=scene,
+    )  # fmt: skip
+    if task == "shelf":  # the network finds no open cells: read them off the cloud
+        out = [belief_mod.with_open_cell(p, view.point, list(view.clouds), scene) for p in out]
+    return out
 
 
 def key_loglik(key: tuple[float, ...], s: ManipState) -> float:

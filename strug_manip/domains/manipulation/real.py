@@ -12,6 +12,11 @@ episode.
   (:mod:`.conditioning`); the belief is kept, since the next real step plans against
   its likeliest models, and the twins' POMDP gets the next search's
   :class:`.catalogue.Root` (the particle each opening follows, the refused actions).
+
+The oracle (``oracle=True``, :mod:`.oracle`) hands the model the real cabinet as its
+only particle and has that particle take over the real state after every step. Every
+episode records its belief's health against the true cabinet (:mod:`.health`; the
+report's ``health``), reading only what the episode computes anyway.
 """
 
 from __future__ import annotations
@@ -38,7 +43,9 @@ from strug_manip.domains.manipulation.actions import SAME_PART, TABLE, ManipActi
 from strug_manip.domains.manipulation.catalogue import Root, best_states, representatives
 from strug_manip.domains.manipulation.episode_setup import draw_episode, handles
 from strug_manip.domains.manipulation.grounding import first_feasible, handle_point, reward
+from strug_manip.domains.manipulation.health import HealthRecorder, RealStep
 from strug_manip.domains.manipulation.model import EpisodeView, ManipulationPOMDP
+from strug_manip.domains.manipulation.oracle import take_over, true_particle
 from strug_manip.domains.manipulation.rules import (
     BEFORE_MOTION,
     CANNOT_START,
@@ -150,6 +157,7 @@ class RealEnvironment:
         objects: real object folders (PartNet-Mobility) to act on instead of generated
             cabinets; the episode's seed draws one.
         views: head-camera views for perception.
+        oracle: the model's belief is the real cabinet (:mod:`.oracle`; evaluation only).
     """
 
     def __init__(
@@ -161,14 +169,17 @@ class RealEnvironment:
         target_link: str | None = None,
         objects: Sequence[Path] = (),
         views: int = 4,
+        oracle: bool = False,
     ) -> None:
         self.model = model
         self.cabinet_seed, self.target, self.target_link = cabinet_seed, target, target_link
-        self.objects, self.views = tuple(objects), views
+        self.objects, self.views, self.oracle = tuple(objects), views, oracle
         self.real: RealEpisode | None = None
         self.state: ManipState | None = None
         #: The belief after the last update, conditioned: what the robot plans against.
         self.belief: ParticleBelief | None = None
+        #: The episode's belief health against the true cabinet (:mod:`.health`).
+        self.health: HealthRecorder | None = None
 
     # --- the Environment protocol ------------------------------------------------------
     def reset(self, rng: np.random.Generator) -> None:
@@ -190,8 +201,9 @@ class RealEnvironment:
         clouds = tuple(cabinet_cloud(world, f) for f in frames)
         timers.perception += time.perf_counter() - t0
         pose = look_poses(world, 1)[0]
+        truth = true_particle(world) if self.oracle else None
         self.model.begin(
-            EpisodeView(tuple(frames), clouds, point, home, world.config, pose), timers
+            EpisodeView(tuple(frames), clouds, point, home, world.config, pose, truth), timers
         )
 
     def execute(self, action: Any, rng: np.random.Generator) -> Executed:
@@ -205,17 +217,24 @@ class RealEnvironment:
 
     def condition(self, belief: ParticleBelief) -> ParticleBelief:
         """``belief`` given what the robot knows for certain (:mod:`.conditioning`),
-        kept; the model's :class:`.catalogue.Root` for the next search."""
+        kept; the model's :class:`.catalogue.Root` for the next search. The oracle's
+        particle then takes over the real state (:func:`.oracle.take_over`)."""
         real, w, model = self.real, self.model.worlds, self.model
         if real is None or w is None or all(s.t == 0 for s in belief.states):
             self.belief = belief
             refused = frozenset(real.refused) if real is not None else frozenset()
             model.root = Root(model.root.reps, best_states(belief), refused, 0)
+            if real is not None and w is not None:
+                self.health = self._health(belief)
             return belief
         if real.still:
             belief = conditioning.unmoved(belief, self.belief)
         shut = self.shut_parts()
         self.belief = conditioning.condition(belief, real.world, w, model.parts, shut)
+        if self.oracle:
+            self.belief = take_over(self.belief, real.world, w)
+        if self.health is not None:
+            self.health.updated(self.belief)
         reps = representatives(model.cat, self.belief, model.root.reps)
         model.root = Root(reps, best_states(self.belief), frozenset(real.refused), real.now)
         return self.belief
@@ -229,9 +248,9 @@ class RealEnvironment:
         link = functools.partial(self.real_link, a.part)
         before = handle_point(world, a, link)
         seed = int(rng.integers(2**31))
-        out, tried = None, 0
+        out, tried, planned = None, 0, -1
         for i, state in self.plan_models(a, rng):
-            tried += 1
+            tried, planned = tried + 1, i
             world.restore(s.sim)  # a stop before motion may still have stepped it
             candidates, plan_world = model.skills(i, a, state, holder=i)
             if plan_world is None or a.skill == "Pick":
@@ -270,8 +289,21 @@ class RealEnvironment:
         news, real.weighed = scene != real.weighed, scene
         model.timers.real += time.perf_counter() - t0
         obs = ManipObservation(observation_key(status, holding, motion), cloud, summary, news)
+        if self.health is not None and self.belief is not None:
+            name = model.action_space().name(a)
+            done_step = RealStep(s.t, a, name, planned, obs.key, r, news, model.root.rep(a))
+            self.health.record(self.belief, done_step)
         done = r != 0.0 or s.t + 1 >= model.max_steps
         return Step(ManipState(REAL, world.snapshot(), s.t + 1, obs.key), obs, r, done)
+
+    def _health(self, initial: ParticleBelief) -> HealthRecorder:
+        """A new episode's belief-health recorder, from its initial belief."""
+        real, model = self._need_real(), self.model
+        return HealthRecorder(
+            model.cat, model.need_worlds(), real.world.scene.cabinet_spec,
+            real.world.scene.T_world_cabinet, real.target,
+            self.real_link, model.max_steps, initial,
+        )  # fmt: skip
 
     def plan_models(self, a: ManipAction, rng: np.random.Generator) -> list[tuple[int, WorldState]]:
         """The models the real robot plans ``a`` against, in the order it tries them
@@ -343,18 +375,19 @@ class RealEnvironment:
         status`` per step that ran one, named as in :attr:`RealEpisode.labels`)."""
         if self.real is None:
             return {}
-        return {
+        out = {
             "cabinet_seed": self.real.seed,
             "cabinet": self.real.world.scene.cabinet_spec.name,
             "real": [f"{k} {o.status}" for k, o in zip(self.real.labels, self.real.outcomes,
                      strict=True)],
         }  # fmt: skip
+        return out if self.health is None else {**out, "health": self.health.as_dict()}
 
     def close(self) -> None:
         """Free the real world (the model frees its own: its ``close``)."""
         if self.real is not None:
             self.real.world.close()
-        self.real, self.belief, self.state = None, None, None
+        self.real, self.belief, self.state, self.health = None, None, None, None
 
     def _need_real(self) -> RealEpisode:
         if self.real is None:

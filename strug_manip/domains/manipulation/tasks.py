@@ -13,7 +13,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from planners.errors import ConfigError, check_positive_int
+from planners.errors import ConfigError, UnknownNameError, check_positive_int
 from strug_manip.domains.manipulation.actions import DEFAULT_PROBES
 from strug_manip.domains.manipulation.episode_setup import world_point
 from strug_manip.domains.manipulation.model import (
@@ -22,6 +22,7 @@ from strug_manip.domains.manipulation.model import (
     VIEWS,
     ManipulationPOMDP,
 )
+from strug_manip.domains.manipulation.oracle import BELIEFS
 from strug_manip.domains.manipulation.real import RealEnvironment, RealEpisode
 from strug_manip.objects.loader import object_folders
 
@@ -47,6 +48,9 @@ class ManipulationTask(ManipulationPOMDP):
             (:func:`~strug_manip.objects.loader.object_folders` lists a folder's).
         target_link: the target part by its link name (``link_2``), instead of
             ``target``.
+        belief: ``perception`` (the robot's: particles from its head camera's views) or
+            ``true`` (the oracle's, evaluation only: the real cabinet as the only
+            particle, taking over the real state after every step; :mod:`.oracle`).
 
     Raises:
         ConfigError, UnknownNameError: a bad argument, naming it.
@@ -64,8 +68,11 @@ class ManipulationTask(ManipulationPOMDP):
         max_steps: int = MAX_STEPS,
         objects: Sequence[str | Path] = (),
         target_link: str | None = None,
+        belief: str = "perception",
     ) -> None:
         check_positive_int("max_steps", max_steps)
+        if belief not in BELIEFS:
+            raise UnknownNameError("belief", belief, list(BELIEFS))
         folders = tuple(p for o in objects for p in object_folders(o))
         if folders and cabinet_seed is not None:
             raise ConfigError("give cabinet_seed or objects, not both")
@@ -78,10 +85,10 @@ class ManipulationTask(ManipulationPOMDP):
         if not (isinstance(views, int) and 1 <= views <= 6):
             raise ConfigError(f"views must be an integer in 1..6, got {views!r}")
         self.cabinet_seed, self.target, self.target_link = cabinet_seed, point, target_link
-        self.objects, self.views = folders, views
+        self.objects, self.views, self.belief_source = folders, views, belief
         self.environment = RealEnvironment(
             self, cabinet_seed=cabinet_seed, target=point, target_link=target_link,
-            objects=folders, views=views,
+            objects=folders, views=views, oracle=belief == "true",
         )  # fmt: skip
 
     @property
