@@ -8,6 +8,7 @@ Usage::
     python tools/eval_perception.py --seeds 3000:3010 --oracle        # geometry alone
     python tools/eval_perception.py --seeds 3000:3010 --dropout 0.11  # NaN depth dropouts
     python tools/eval_perception.py --objects ~/partnet --views 4       # real objects
+    python tools/eval_perception.py --objects ~/partnet --states 10     # 10 states each
 
 Per cabinet seed: the cabinet in one random state (each movable part opened with
 probability 0.5, as in training), seen from the robot's ``--views`` standard head poses
@@ -84,6 +85,7 @@ from strug_manip.objects import generate_cabinet, load_articulated_object
 from strug_manip.objects.assembly import FRONT, GAP
 from strug_manip.objects.describe import describe_object
 from strug_manip.objects.generator import STYLES, CabinetSpec
+from strug_manip.objects.hypotheses import BelievedJoint, same_joint
 from strug_manip.objects.loader import object_folders
 from strug_manip.world.perception_data import LabelledView, render_episode
 from strug_manip.world.scene import SceneConfig, cabinet_pose
@@ -336,26 +338,13 @@ def evaluate_cabinet(
         if tp["type"] == "fixed":
             continue
         support_n += 1
-        ok = False
-        for p in particles:
-            T = cabinet_pose(p.spec.depth)
-            for part in p.spec.parts:
-                if part.joint_type != tp["type"]:
-                    continue
-                axis = T[:3, :3] @ part.axis
-                origin = T[:3, :3] @ part.origin + T[:3, 3]
-                if _angle(axis, tp["axis"]) > 10.0:
-                    continue
-                d = (
-                    _line_distance(tp["origin"], origin, axis)
-                    if tp["type"] == "revolute"
-                    else float(np.linalg.norm(origin - tp["origin"]))
-                )
-                if d <= 0.05:
-                    ok = True
-                    break
-            if ok:
-                break
+        true = BelievedJoint(tp["type"], tp["axis"], tp["origin"])
+        ok = any(
+            part.movable
+            and same_joint(BelievedJoint.of_part(part, 0.0, cabinet_pose(p.spec.depth)), true)
+            for p in particles
+            for part in p.spec.parts
+        )
         support_ok += ok
         if not ok:
             causes["true model not in the particles' support"] += 1
@@ -439,6 +428,13 @@ def main(argv: list[str] | None = None) -> int:
         help="the generated cabinets' style (plain: the tasks' cabinets; furniture: the look "
         "of real furniture)",
     )
+    ap.add_argument(
+        "--states",
+        type=int,
+        default=1,
+        help="with --objects: random states per object (parts opened, robot placed); each "
+        "counts as a cabinet",
+    )
     ap.add_argument("--views", type=int, default=4)
     ap.add_argument("--particles", type=int, default=50)
     ap.add_argument("--noisy-runs", type=int, default=2)
@@ -449,16 +445,21 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     from tqdm import tqdm
 
+    if args.states < 1:
+        raise SystemExit(f"--states must be >= 1, got {args.states}")
     if not 0.0 <= args.dropout < 1.0:
         raise SystemExit(f"--dropout must be in [0, 1), got {args.dropout}")
     perceiver = None if args.oracle else Perceiver(args.weights)
     rng = np.random.default_rng(0)
     if args.objects is not None:
         folders = object_folders(args.objects)
-        what = f"objects {args.objects} ({len(folders)})"
-        results = []
-        for i, folder in enumerate(tqdm(folders, unit="object", disable=args.json)):
-            results.append(evaluate_cabinet(folder.name, args, perceiver, rng, folder, i))
+        what = f"objects {args.objects} ({len(folders)} x {args.states} states)"
+        runs = [(i, k, f) for k in range(args.states) for i, f in enumerate(folders)]
+        results = [
+            # State k of object i: view seed i + 1000 k (k = 0: the single state of before).
+            evaluate_cabinet(folder.name, args, perceiver, rng, folder, i + 1000 * k)
+            for i, k, folder in tqdm(runs, unit="object state", disable=args.json)
+        ]
     else:
         seeds = args.seeds
         what = f"seeds {seeds.start}:{seeds.stop} ({args.style})"
