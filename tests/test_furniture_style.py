@@ -79,7 +79,7 @@ def test_furniture_cabinets_are_real_furniture_and_stand_still() -> None:
         seen["finials"] += any(n.startswith("handle_end") for n in names)
         assert gen.TOTAL_MASS[0] - 1e-6 <= spec.mass <= gen.TOTAL_MASS[1] + 1e-6
         for p in spec.movable_parts:
-            assert p.kind != "drawer" or p.cell_size[1] <= gen.CELL_HEIGHT_RANGE[1] + 1e-9, seed
+            assert p.kind != "drawer" or p.cell_size[1] <= tallest, seed  # one row at most
             face = p.cell_center[0]
             if p.handle_pos is not None:  # on or in front of the closed front
                 assert face - 0.03 <= p.handle_pos[0] <= face + 0.06
@@ -129,3 +129,22 @@ def test_training_styles_are_drawn_per_seed() -> None:
     assert {cabinet_style(s, 0.0) for s in range(50)} == {"plain"}
     with pytest.raises(ConfigError, match="furniture share"):
         cabinet_style(1, 1.5)
+
+
+def test_furniture_drawers_are_short_and_wide_and_doors_tall() -> None:
+    """The layout of real furniture: over 60 cabinets a drawer's front is wider than
+    tall more often than a door's, and a short top row of drawers shows up."""
+    aspects: dict[str, list[float]] = {"drawer": [], "door": []}
+    short_top = 0
+    for seed in range(60):
+        spec = generate_cabinet(seed, style="furniture")
+        for p in spec.movable_parts:
+            if p.kind == "door" and p.hinge not in ("left", "right"):
+                continue  # flaps are wide by nature
+            aspects[p.kind].append(p.cell_size[1] / p.cell_size[0])
+        short_top += spec.rows > 1 and spec.row_heights[0] <= gen.DRAWER_ROW[1] + 1e-9
+    assert np.median(aspects["drawer"]) < 0.6 < np.median(aspects["door"]), {
+        k: float(np.median(v)) for k, v in aspects.items()
+    }
+    assert short_top >= 10
+    assert gen.kind_weights(0.3)["drawer"] > gen.kind_weights(1.5)["drawer"]

@@ -607,6 +607,22 @@ RECESS = (0.004, 0.009)  # [m], how far a panel sits behind its frame
 MIN_FRAMED = 0.10  # [m], a smaller front stays a slab
 LONG_BAR = (0.15, 0.40)  # [m], door pulls of real furniture reach 40 cm
 LONG_BAR_PROB = 0.4
+#: A short top row (drawers over doors, as kitchen bases and 41083/40147 have) [m].
+DRAWER_ROW = (0.12, 0.20)
+DRAWER_ROW_PROB = 0.5
+#: Part kinds by a cell's height / width: real drawers are short and wide (SAPIEN's
+#: 40147 and 41083: 0.35-0.39), real doors tall (1.2-1.3); cells in between keep the
+#: plain weights.
+WIDE_CELL, TALL_CELL = 0.55, 0.9
+WIDE_KINDS: dict[str, float] = {"drawer": 0.7, "door": 0.1, "shelf": 0.1, "panel": 0.1}
+TALL_KINDS: dict[str, float] = {"drawer": 0.1, "door": 0.6, "shelf": 0.15, "panel": 0.15}
+
+
+def kind_weights(aspect: float) -> dict[str, float]:
+    """The furniture style's part-kind weights for a cell of height / width ``aspect``."""
+    if aspect < WIDE_CELL:
+        return WIDE_KINDS
+    return TALL_KINDS if aspect > TALL_CELL else KIND_WEIGHTS
 
 
 @dataclass(frozen=True)
@@ -619,6 +635,7 @@ class FurnitureLook:
         plinth: plinth height [m] (0: none).
         top: countertop thickness, front and side overhang [m], or ``None``.
         door_design, drawer_design: keys of :data:`FRONT_DESIGNS`.
+        drawer_row: the height of a short top row [m] (drawers over doors), or 0.
         frame_frac: rail width as a share of a front's smaller extent.
         recess: panel depth behind the frame [m].
         bar_length: bar handle length [m] (before the 0.6 x front cap).
@@ -644,6 +661,19 @@ class FurnitureLook:
     grip_slot: bool
     merge: str
     merge_at: tuple[float, float]
+    drawer_row: float = 0.0
+
+    def rows(self, heights: np.ndarray) -> np.ndarray:
+        """Row heights [m] with a short top row of drawers (``drawer_row`` > 0: its
+        height) over the rest, which share the remainder as they did; unchanged for a
+        single row or no drawer row."""
+        if self.drawer_row <= 0.0 or len(heights) < 2 or heights[0] <= self.drawer_row:
+            return heights
+        out = np.array(heights, dtype=float)
+        rest = out[1:].sum() + out[0] - self.drawer_row
+        out[1:] *= rest / out[1:].sum()
+        out[0] = self.drawer_row
+        return out
 
     @property
     def top_height(self) -> float:
@@ -808,13 +838,14 @@ def draw_look(rng: np.random.Generator) -> FurnitureLook:
     bar_length = _uniform(rng, LONG_BAR if long_bar else BAR_LENGTH)
     cap = float(rng.uniform(1.3, 1.8)) if rng.random() < 0.5 else 0.0  # mushroom knobs
     merge_at = (float(rng.random()), float(rng.random()))
+    drawer_row = _uniform(rng, DRAWER_ROW) if rng.random() < DRAWER_ROW_PROB else 0.0
     return FurnitureLook(
         colors=colors, finishes=finishes, plinth=plinth, top=top,
         door_design=door_design, drawer_design=drawer_design,
         frame_frac=_uniform(rng, FRAME_FRAC), recess=_uniform(rng, RECESS),
         bar_length=bar_length, square_bar=bool(rng.random() < 0.3),
         bar_ends=bool(rng.random() < 0.3), knob_cap=cap, grip_slot=bool(rng.random() < 0.5),
-        merge=_choice(rng, MERGES, tuple(MERGES)), merge_at=merge_at,
+        merge=_choice(rng, MERGES, tuple(MERGES)), merge_at=merge_at, drawer_row=drawer_row,
     )  # fmt: skip
 
 
@@ -933,6 +964,8 @@ def generate_cabinet(
     rows = _count(rng, H_in, t, CELL_HEIGHT_RANGE, MAX_ROWS)
     col_widths = _split(rng, W_in - (cols - 1) * t, cols, CELL_WIDTH_RANGE)
     row_heights = _split(rng, H_in - (rows - 1) * t, rows, CELL_HEIGHT_RANGE)
+    if look is not None:
+        row_heights = look.rows(row_heights)
     palette = rng.permutation(len(_WOODS))
     body_rgba = _WOODS[int(palette[0])]
     front_rgba = body_rgba if rng.random() < 0.5 else _WOODS[int(palette[1])]
@@ -982,6 +1015,11 @@ def generate_cabinet(
     # --- cells ----------------------------------------------------------------------
     n_cells = len(cells)
     cell_kinds = [_choice(rng, KIND_WEIGHTS, kinds) for _ in range(n_cells)]
+    if look is not None:  # real furniture: drawers short and wide, doors tall
+        for idx, (i, j, rs, cs) in enumerate(cells):
+            h = z_edges[i][1] - z_edges[i + rs - 1][0]
+            w = y_edges[j + cs - 1][1] - y_edges[j][0]
+            cell_kinds[idx] = _choice(rng, kind_weights(h / w), kinds)
     movable_allowed = [k for k in kinds if k in MOVABLE_KINDS]
     if movable_allowed and not any(k in MOVABLE_KINDS for k in cell_kinds):
         cell_kinds[int(rng.integers(n_cells))] = _choice(rng, KIND_WEIGHTS, movable_allowed)
