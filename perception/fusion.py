@@ -53,6 +53,10 @@ from perception.instances import Instance, ViewParts
 
 #: Distance of a point on the front plane from it [m].
 PLANE_TOL = 0.006
+#: How far overlay fronts stand in front of the carcass's front plane [m]: real
+#: furniture's doors and drawer fronts often sit on a face frame instead of inset in it
+#: (SAPIEN's 40147: 15 mm); they belong to the front's extent.
+OVERLAY = 0.025
 #: A door panel tilted by more than this from the front plane is open [rad].
 DOOR_OPEN_TILT = math.radians(12.0)
 #: Largest side-door opening the generator makes (2.10 rad) plus a margin [rad].
@@ -318,7 +322,9 @@ def _run(v: np.ndarray, bin_size: float = 0.01, max_gap: int = 8) -> tuple[float
     lo = float(v.min())
     idx = ((v - lo) / bin_size).astype(int)
     occupied = np.bincount(idx) > 0
-    k0 = k1 = int((np.median(v) - lo) / bin_size)
+    # Start at the occupied bin nearest the median (the median may fall in a gap).
+    filled = np.flatnonzero(occupied)
+    k0 = k1 = int(filled[np.argmin(np.abs(filled - int((np.median(v) - lo) / bin_size)))])
     gap = 0
     while k1 + 1 < len(occupied) and gap <= max_gap:
         k1 += 1
@@ -352,12 +358,17 @@ def front_frame(views: Sequence[ViewParts], max_depth: float | None = MAX_DEPTH)
     R = np.stack([n, y, z], axis=1)
     local_y = pts @ y
     local_z = pts[:, 2]
-    y0, y1 = _run(local_y[inl])
+    ahead = pts @ n - d
+    # The front's extent: the plane's points and those up to OVERLAY in front of it
+    # (overlay fronts, and the face frame they sit on, may cover most of a real front
+    # whose largest plane is a blind panel behind the frame).
+    ext = inl | ((ahead > -PLANE_TOL) & (ahead < OVERLAY))
+    y0, y1 = _run(local_y[ext])
     if y1 - y0 < MIN_FRONT:  # a broken run: fall back to the inliers' percentiles
-        y0, y1 = (float(v) for v in np.percentile(local_y[inl], [1.0, 99.0]))
-    z0, z_top = _run(local_z[inl])
+        y0, y1 = (float(v) for v in np.percentile(local_y[ext], [1.0, 99.0]))
+    z0, z_top = _run(local_z[ext])
     if z_top - z0 < MIN_FRONT:
-        z0, z_top = (float(v) for v in np.percentile(local_z[inl], [1.0, 99.0]))
+        z0, z_top = (float(v) for v in np.percentile(local_z[ext], [1.0, 99.0]))
     behind = d - pts @ n
     body = (local_y > y0 - 0.02) & (local_y < y1 + 0.02) & (behind > -0.02) & (behind < 0.7)
     body &= local_z < z_top + 0.02

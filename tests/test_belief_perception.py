@@ -41,7 +41,7 @@ def test_geometry_from_perfect_maps_is_exact() -> None:
     (cabinets with handles: a closed bare front's type is the prior's guess)."""
     from strug_manip.objects import generate_cabinet
 
-    args = argparse.Namespace(views=4, dropout=0.0, noisy_runs=0, particles=30)
+    args = argparse.Namespace(views=4, dropout=0.0, noisy_runs=0, particles=30, style="plain")
     seeds = [
         s for s in range(3000, 3010) if any(p.handle != "none" for p in generate_cabinet(s).parts)
     ]
@@ -63,7 +63,7 @@ def test_unseen_types_are_closed_fronts_of_handle_less_cabinets() -> None:
     assert type_unseen(part, 0.0) and type_unseen(part, 0.02)
     assert not type_unseen(part, 0.3)  # open: the motion shows the joint
     assert not type_unseen(other, 0.0)  # a handle's place shows it
-    args = argparse.Namespace(views=2, dropout=0.0, noisy_runs=0, particles=10)
+    args = argparse.Namespace(views=2, dropout=0.0, noisy_runs=0, particles=10, style="plain")
     res = evaluate_cabinet(bare, args, None, np.random.default_rng(0))
     out, _ = summarise([res])
     assert out["joint_type_unseen"]["n"] >= 1  # seed 3001 shows closed bare fronts

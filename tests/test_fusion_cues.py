@@ -18,10 +18,11 @@ from perception.fusion import (
     _apart,
     _associate,
     _weighted_median,
+    front_frame,
     handle_shape,
     read_instance,
 )
-from perception.instances import Instance
+from perception.instances import Instance, ViewParts
 from perception.joint_cues import CUE_EVIDENCE, HandleSeen, closed_front_evidence
 
 FRONT = FrontFrame(np.eye(4), 0.8, 0.8, 0.4, True, 1000)
@@ -147,3 +148,38 @@ def test_the_handle_shape_tells_a_bar_from_a_knob() -> None:
     assert handle_shape([bar_z[:10], knob], FRONT) == ("knob", None)  # 10 of 50 pixels
     assert handle_shape([bar_z[:3]], FRONT) == ("bar", None)  # too few: the prior
     assert handle_shape([], FRONT) == ("bar", None)
+
+
+def _grid(y: tuple[float, float], z: tuple[float, float], x: float, step: float = 0.005):
+    """Points of a front-facing rectangle at ``x`` (world +x toward the camera) [m]."""
+    ys, zs = np.meshgrid(np.arange(*y, step), np.arange(*z, step))
+    return np.stack([np.full(ys.size, x), ys.ravel(), zs.ravel()], axis=1)
+
+
+def test_the_front_takes_in_overlay_fronts_on_a_face_frame() -> None:
+    """SAPIEN's 40147, as its views showed it: a large blind carcass panel 8 mm behind the
+    face frame, a narrow face frame, and overlay door and drawer fronts 15 mm in front of
+    the panel over the other half. The panel is the front plane (most carcass on it);
+    the front's extent must still span the whole face, or the parts fall outside it."""
+    panel = _grid((0.05, 0.40), (0.05, 0.65), 0.0)
+    frame = np.concatenate([_grid((-0.42, -0.40), (0.05, 0.65), 0.008),
+                            _grid((-0.42, 0.05), (0.63, 0.65), 0.008),
+                            _grid((0.00, 0.05), (0.05, 0.65), 0.008)])  # fmt: skip
+    # Fewer points on the fronts than on the panel (seen aslant, as in 40147's views).
+    door = _grid((-0.39, -0.01), (0.05, 0.45), 0.015, step=0.01)
+    drawer = _grid((-0.39, -0.01), (0.47, 0.62), 0.015, step=0.01)
+    xs, zs = np.meshgrid(np.arange(-0.45, 0.0, 0.01), np.arange(0.05, 0.65, 0.01))
+    side = np.stack([xs.ravel(), np.full(xs.size, 0.41), zs.ravel()], axis=1)  # seen aslant
+    pts = np.concatenate([panel, frame, door, drawer, side])
+    cls = np.concatenate([np.ones(len(panel) + len(frame)), np.full(len(door), 4),
+                          np.full(len(drawer), 3), np.ones(len(side))]).astype(int)  # fmt: skip
+    normals = np.tile([1.0, 0.0, 0.0], (len(pts), 1))
+    normals[-len(side) :] = [0.0, 1.0, 0.0]
+    T = np.eye(4)
+    T[:3, 3] = [1.5, 0.0, 0.4]
+    view = ViewParts(T, 0.8, (120, 160), pts, cls, normals, [], np.zeros((120, 160)),
+                     np.zeros((120, 160, 3)), np.zeros((120, 160), bool),
+                     np.zeros((120, 160, 3)), 0.0)  # fmt: skip
+    front = front_frame([view])
+    assert front.width > 0.78, front.width  # the whole face, 0.82 m
+    assert abs(front.to_front(np.array([0.0, -0.2, 0.3]))[1] + 0.19) < 0.03  # centred on it

@@ -145,7 +145,8 @@ def true_parts(
                 hinge=p.hinge,
                 rect=rect,
                 axis=R @ p.axis,
-                origin=R @ p.origin + t,
+                # A drawer's origin: its closed front's centre (BelievedJoint.of_part).
+                origin=R @ (p.cell_center if p.joint_type == "prismatic" else p.origin) + t,
                 handle=p.handle,
                 handle_axis=None if p.handle_axis is None else R @ p.handle_axis,
             )

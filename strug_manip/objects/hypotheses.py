@@ -112,14 +112,20 @@ class BelievedJoint:
     ) -> BelievedJoint:
         """The joint of ``part`` (e.g. the generator's ground truth) at joint position
         ``q`` [m or rad], in the world frame of ``T_world_object`` (4, 4; default
-        identity: the object frame); ``limit`` is the travel left to the upper limit."""
+        identity: the object frame); ``limit`` is the travel left to the upper limit.
+
+        A prismatic joint's origin is the closed front's centre (``cell_center``): its
+        link origin says nothing about where the drawer is (the generator puts it
+        there; PartNet-Mobility puts sliders' origins anywhere, 41083's at the
+        carcass's back), and only a point of the part makes origins comparable."""
         if not isinstance(part, PartSpec) or not part.movable:
             raise ConfigError(f"part must be a movable PartSpec, got {part!r}")
         T = np.eye(4) if T_world_object is None else np.asarray(T_world_object, dtype=float)
+        origin = part.cell_center if part.joint_type == "prismatic" else part.origin
         return cls(
             type=part.joint_type,
             axis=T[:3, :3] @ part.axis,
-            origin=(T @ np.r_[part.origin, 1.0])[:3],
+            origin=(T @ np.r_[origin, 1.0])[:3],
             limit=max(float(part.upper - q), 1e-9),
         )
 
