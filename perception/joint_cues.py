@@ -157,6 +157,10 @@ def closed_front_evidence(handle: HandleSeen | None, handles_elsewhere: bool) ->
     ev = np.array([g, 1.0, g]) if off < CENTRED else np.array([g, g, 1.0])
     if CENTRED <= off <= OFF_CENTRE:
         ev = np.array([g, 1.0, 1.0])
+    elif off > OFF_CENTRE and abs(handle.u) < CENTRED and not handle.vertical_bar:
+        # Centred across, by the top or bottom edge: a flap's, but real furniture puts
+        # drawer pulls and side doors' pulls there too (41083: both): no type ruled out.
+        ev = np.array([g, 1.0, 1.0])
     if handle.vertical_bar:
         ev[1] *= g
     return ev
