@@ -74,17 +74,37 @@ def test_bad_input_gets_one_clear_error():
         make_domain("opendoor").initial_belief(np.random.default_rng(0), 4)
 
 
-@pytest.fixture(scope="module")
-def drawer_episode():
+def _drawer_episode(seed: int):
     """An OpenDrawer episode's domain after its initial belief (target given: no
     full-robot check of the target)."""
-    probe = make_domain("opendrawer", cabinet_seed=SEED, particles=8)
+    probe = make_domain("opendrawer", cabinet_seed=seed, particles=8)
     _start(probe, np.random.default_rng(0))
     point = _top_point(probe)
     probe.close()
-    d = make_domain("opendrawer", cabinet_seed=SEED, particles=8, target=tuple(point))
+    d = make_domain("opendrawer", cabinet_seed=seed, particles=8, target=tuple(point))
     s0 = _start(d, np.random.default_rng(0))
     belief = d.environment.condition(d.initial_belief(np.random.default_rng(1), 8))
+    return d, s0, belief
+
+
+@pytest.fixture(scope="module")
+def drawer_episode():
+    """The episode of cabinet :data:`SEED` (:func:`_drawer_episode`)."""
+    d, s0, belief = _drawer_episode(SEED)
+    yield d, s0, belief
+    d.close()
+
+
+#: A cabinet whose catalogued parts perception places within SAME_PART of two real
+#: parts or more (on cabinet 11 the weights of issue 39 place one: its handle points
+#: are 6-7 cm off, a known limit of the matching, docs/status.md).
+SHUT_SEED = 12
+
+
+@pytest.fixture(scope="module")
+def shut_episode():
+    """The episode of cabinet :data:`SHUT_SEED` (:func:`_drawer_episode`)."""
+    d, s0, belief = _drawer_episode(SHUT_SEED)
     yield d, s0, belief
     d.close()
 
@@ -202,12 +222,12 @@ def test_the_belief_takes_over_what_the_robot_knows_after_a_real_step(drawer_epi
                                                ("base_x_joint", "base_y_joint")])  # fmt: skip
 
 
-def test_a_part_the_real_robot_sees_shut_is_shut_in_every_particle(drawer_episode):
+def test_a_part_the_real_robot_sees_shut_is_shut_in_every_particle(shut_episode):
     """A drawer every particle holds open (as after a twin's opening) that stands shut in
     the real cabinet (as after an arm pushed it shut) is shut in every particle after
     conditioning; one open in the real cabinet keeps each particle's own joint (the
     camera shows a front flush, not which way an open part opens)."""
-    d, s0, belief = drawer_episode
+    d, s0, belief = shut_episode
     rng = np.random.default_rng(0)
     real = _real_step(d, s0, ManipAction("Pick", grasp="top"), rng)
     moved = [d.step(s, ManipAction("Pick", grasp="top"), rng).state for s in belief.states]
