@@ -20,11 +20,12 @@ particle, and every later Place aims into it.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
 from planners.particles import ParticleBelief
+from strug_manip.control import PlanningTwin
 from strug_manip.control.skills import holds_object
 from strug_manip.domains.manipulation.actions import CataloguePart
 from strug_manip.domains.manipulation.grounding import position
@@ -55,20 +56,33 @@ def condition(
     holding = holds_object(real)
     known = [] if holding else [OBJECT_JOINT]
     T_go = np.linalg.inv(real.site_pose(GRIPPER_SITE)) @ real.object_pose() if holding else None
+
+    def edit(tw: PlanningTwin, s: ManipState) -> None:
+        tw.world.set_cabinet_pose(moved @ tw.world.scene.T_world_cabinet)
+        tw.world.copy_joints(real, known)
+        tw.set_robot_base(base)
+        opened = _opened(parts, s.origin, shut, tw.world)
+        if opened:
+            tw.world.set_parts(opened)
+        if T_go is not None and not holds_object(tw.world):
+            tw.world.set_object_pose(tw.world.site_pose(GRIPPER_SITE) @ T_go)
+
+    return edit_states(belief, w, edit)
+
+
+def edit_states(
+    belief: ParticleBelief, w: ParticleWorlds, edit: Callable[[PlanningTwin, ManipState], None]
+) -> ParticleBelief:
+    """``belief`` with ``edit(twin, state)`` applied once to each distinct particle
+    state, in its particle's twin restored to it; the twin's snapshot is the new state
+    (same weights, same origins)."""
     done: dict[ManipState, ManipState] = {}
     states = []
     for s in belief.states:
         if s not in done:
             tw = w.twins[s.origin]
             tw.restore(s.sim)
-            tw.world.set_cabinet_pose(moved @ tw.world.scene.T_world_cabinet)
-            tw.world.copy_joints(real, known)
-            tw.set_robot_base(base)
-            opened = _opened(parts, s.origin, shut, tw.world)
-            if opened:
-                tw.world.set_parts(opened)
-            if T_go is not None and not holds_object(tw.world):
-                tw.world.set_object_pose(tw.world.site_pose(GRIPPER_SITE) @ T_go)
+            edit(tw, s)
             done[s] = ManipState(s.origin, tw.snapshot(), s.t, s.last)
         states.append(done[s])
     return ParticleBelief(states, belief.weights, belief.origin)

@@ -29,7 +29,9 @@ The toy domains have no perception to replace: the runner refuses the oracle the
 from __future__ import annotations
 
 from planners.particles import ParticleBelief
+from strug_manip.control import PlanningTwin
 from strug_manip.domains.manipulation.belief import Particle
+from strug_manip.domains.manipulation.conditioning import edit_states
 from strug_manip.domains.manipulation.state import ManipState
 from strug_manip.domains.manipulation.worlds import ParticleWorlds
 from strug_manip.world.sim import ManipulationWorld
@@ -55,14 +57,9 @@ def take_over(belief: ParticleBelief, real: ManipulationWorld, w: ParticleWorlds
     rest). The oracle's particle describes the real cabinet, so its joints are the
     real joints by name."""
     T_cabinet, parts = real.cabinet_pose(), real.part_positions()
-    done: dict[ManipState, ManipState] = {}
-    states = []
-    for s in belief.states:
-        if s not in done:
-            tw = w.twins[s.origin]
-            tw.restore(s.sim)
-            tw.world.set_cabinet_pose(T_cabinet)
-            tw.world.set_parts(parts)
-            done[s] = ManipState(s.origin, tw.snapshot(), s.t, s.last)
-        states.append(done[s])
-    return ParticleBelief(states, belief.weights, belief.origin)
+
+    def edit(tw: PlanningTwin, _: ManipState) -> None:
+        tw.world.set_cabinet_pose(T_cabinet)
+        tw.world.set_parts(parts)
+
+    return edit_states(belief, w, edit)
