@@ -85,10 +85,20 @@ class SkillParams:
             believed cabinet, whose boards perception puts a centimetre or two off,
             and the arm lags its command on the way; a carried object whose end
             grazed a board's front edge turned in the grasp (README), and the
-            Place that followed caught the cell's floor and slid the cabinet. Where
-            the start or the goal is nearer than this (an object just lifted, a pre-place
-            beside an open door), or the first planner finds no such path, the
-            motion is planned as before, touching nothing.
+            Place that followed caught the cell's floor and slid the cabinet. What is
+            nearer than this where the motion starts or ends (an object just lifted, a
+            pre-place beside an open door) counts where it touches; where the first
+            planner finds no such path, the motion is planned as before, touching
+            nothing.
+        free_clearance: a free motion (the reach, the stow, a recovery) keeps the robot
+            and what it carries this far from the cabinet, but for what is that near
+            where the motion starts or ends, where it can (else it is planned touching
+            nothing, as before) [m]: the arm follows a free motion up to a few
+            centimetres off its plan (its joints lag the command by up to 0.04 rad,
+            measured on a stow; the checks along an edge are up to 4.4 cm apart at the
+            gripper), and a plan that grazed an open drawer pushed it (an elbow on the
+            stow after a Place slid the cabinet 1.6 cm; a wrist on the reach knocked a
+            drawer shut and slid the cabinet 3 cm).
         cabinet_motion_limit: the cabinet's base more than this from where it stood
             when the skill started (horizontally) stops the skill (status
             ``cabinet_moved``) [m]: a part that does not move the way the robot
@@ -98,6 +108,11 @@ class SkillParams:
             right model moves it by millimetres, a top flap lifted open by up to 2 cm
             (README): 3 cm leaves room for that and still stops a wrong pull at a
             third of the 0.1 m at which the task counts the cabinet dragged.
+        settle_limit: after a skill the robot holds still, before it reports, while
+            the cabinet still moves (:func:`~.executor.at_rest`), up to this long [s]:
+            what it reports is where the cabinet came to rest. A cabinet the stow
+            tipped by 15 degrees was still rocking when the skill used to report
+            (0.15 s after it), and settled within about a second.
         time_budget: simulated time budget of one skill [s].
         plan_timeout: OMPL time budget per arm motion and planner [s] (wall): an arm
             reaching into a low drawer with the object is a narrow passage that
@@ -139,7 +154,9 @@ class SkillParams:
     probe_tolerance: float = 0.02
     free_tolerance: float = 0.2
     held_clearance: float = 0.02
+    free_clearance: float = 0.03
     cabinet_motion_limit: float = 0.03
+    settle_limit: float = 2.0
     time_budget: float = 60.0
     plan_timeout: float = 4.0
     first_planner_timeout: float = 0.5
