@@ -112,8 +112,8 @@ class ContactChecker:
         # Bodies whose contacts count: the robot's, and an attached body.
         self._counts = self.robot.copy()
         self._attached: tuple[int, int, np.ndarray] | None = None  # body, qpos adr, T_g_b
-        # Pairs that count only where they touch (not within a margin), either order.
-        self._excused = np.zeros((m.nbody, m.nbody), dtype=bool)
+        # Geom pairs that count only where they touch (not within a margin), either order.
+        self._excused = np.zeros((m.ngeom, m.ngeom), dtype=bool)
 
     def body_id(self, name: str) -> int:
         """Id of the body ``name``; raises :class:`UnknownNameError`."""
@@ -232,8 +232,10 @@ class ContactChecker:
         self.model.body_margin[ids] = np.maximum(distance, self._body_margin0[ids])
 
     def excuse(self, pairs: Iterable[tuple[int, int]] = ()) -> ContactChecker:
-        """Replace the excused body pairs (ids, either order): they count only where
-        they touch, not within a margin (:meth:`keep_clear_of`, :meth:`keep_clear`)."""
+        """Replace the excused geom pairs (ids, either order; e.g. :meth:`geom_pairs`):
+        they count only where they touch, not within a margin (:meth:`keep_clear_of`,
+        :meth:`keep_clear`). Geoms, not bodies: a hand near a drawer's side wall where
+        a motion ends is no reason to let it graze the drawer's front on the way."""
         self._excused[:] = False
         for a, b in pairs:
             self._excused[a, b] = self._excused[b, a] = True
@@ -284,16 +286,23 @@ class ContactChecker:
             return np.zeros((0, 2), dtype=int)
         return self._forbidden()
 
-    def _forbidden(self) -> np.ndarray:
+    def _forbidden(self, with_geoms: bool = False) -> np.ndarray:
         bodies = self.geom_body[self.data.contact.geom]
         a, b = bodies[:, 0], bodies[:, 1]
         # (The model's bits leave out the scene's contacts among themselves, except
         # an explicit <pair>: the robot test stays.)
         bad = (self._counts[a] | self._counts[b]) & ~self._allowed[a, b]
-        excused = self._excused[a, b]
+        geoms = self.data.contact.geom
+        excused = self._excused[geoms[:, 0], geoms[:, 1]]
         if excused.any():  # within a margin but not touching
             bad &= ~(excused & (self.data.contact.dist >= 0.0))
-        return bodies[bad]
+        return bodies[bad] if not with_geoms else geoms[bad]
+
+    def geom_pairs(self, q: np.ndarray) -> np.ndarray:
+        """Forbidden contacts at ``q`` as geom ids, (k, 2)."""
+        if self._collide(q) == 0:
+            return np.zeros((0, 2), dtype=int)
+        return self._forbidden(with_geoms=True)
 
     def hand_in_scene(self, pairs: np.ndarray) -> bool:
         """Some pair of ``pairs`` (k, 2) (:meth:`pairs`) is the hand against the scene:

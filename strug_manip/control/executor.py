@@ -24,6 +24,7 @@ A change to a rule is made here, and both bodies follow it.
 from __future__ import annotations
 
 import contextlib
+import math
 import time
 from collections.abc import Callable, Iterator, Sequence
 from typing import Protocol
@@ -174,15 +175,15 @@ def plan_stow(
     for prefix in starts:
         start = prefix[-1] if len(prefix) else q_end
 
-        def run(i: int, planner: ArmMotionPlanner, start: np.ndarray = start) -> MotionPlan:
-            return _plan(
-                planner, start, goal, validity, params.planner_timeout(i, len(planners)), seed
-            )
+        def run(
+            i: int, planner: ArmMotionPlanner, timeout: float, start: np.ndarray = start
+        ) -> MotionPlan:
+            return _plan(planner, start, goal, validity, timeout, seed)
 
         def clear(start: np.ndarray = start) -> contextlib.AbstractContextManager[None]:
             return keeping_clear(checker, plan_world, base, (start, goal), params, held)
 
-        res = clear_first(planners, run, clear)
+        res = clear_first(planners, run, clear, params)
         if res.success:
             return np.vstack([prefix, np.asarray(res.waypoints[1:])])
     assert res is not None
@@ -191,23 +192,25 @@ def plan_stow(
 
 def clear_first(
     planners: Sequence[ArmMotionPlanner],
-    run: Callable[[int, ArmMotionPlanner], MotionPlan],
+    run: Callable[[int, ArmMotionPlanner, float], MotionPlan],
     clear: Callable[[], contextlib.AbstractContextManager[None]],
+    params: SkillParams,
 ) -> MotionPlan:
-    """The first plan found: ``run(0, planners[0])`` inside ``clear()`` (e.g.
-    :func:`keeping_clear`), else ``run(i, planner)`` for each of ``planners`` in turn
-    with the plain check, until one succeeds or fails for another reason than its
-    budget. The clearance gets the first planner's short budget alone: where it leaves
-    no room (an arm reaching into a low drawer, a narrow passage the fallback planner
-    needs seconds for even without it), the plain plans run as before."""
-    with clear():
-        res = run(0, planners[0])
-    if res.success:
-        return res
-    for i, planner in enumerate(planners):
-        res = run(i, planner)
-        if res.success or res.reason != NO_PLAN:
+    """The first plan found by ``run(i, planner, timeout)`` (the ``i``-th of
+    ``planners``, its budget ``timeout`` [s]): each planner in turn inside ``clear()``
+    (e.g. :func:`keeping_clear`), its budget capped at ``clear_timeout``, then each in
+    turn again with the plain check and its full budget; a planner's turn ends the
+    round when it succeeds or fails for another reason than its budget."""
+    res = None
+    for keep, cap in ((clear, params.clear_timeout), (contextlib.nullcontext, math.inf)):
+        with keep():
+            for i, planner in enumerate(planners):
+                res = run(i, planner, min(params.planner_timeout(i, len(planners)), cap))
+                if res.success or res.reason != NO_PLAN:
+                    break
+        if res is not None and res.success:
             break
+    assert res is not None
     return res
 
 
@@ -247,9 +250,9 @@ def keeping_clear(
     """Within the block, ``checker`` (loaded from ``world``) counts the robot's contacts
     with the cabinet from ``free_clearance`` apart, and an attached object's with
     anything from ``held`` [m] apart (:meth:`~.contacts.ContactChecker.keep_clear`), except
-    the pairs already that near where the motion starts or ends (torso + arm ``ends``,
-    each (8,), the base at ``base`` (3,)): those count where they touch. Afterwards the
-    plain check is back.
+    the pairs of geoms already that near where the motion starts or ends (torso + arm
+    ``ends``, each (8,), the base at ``base`` (3,)): those count where they touch.
+    Afterwards the plain check is back.
 
     Why: free motions are planned touching-free and the arm follows them a few
     centimetres off (it lags its command, and the checks along an edge are 4 cm
@@ -263,7 +266,7 @@ def keeping_clear(
         checker.keep_clear(held)
     near = set()
     for q in ends:
-        near |= {(int(a), int(b)) for a, b in checker.pairs(np.r_[base, q]).tolist()}
+        near |= {(int(a), int(b)) for a, b in checker.geom_pairs(np.r_[base, q]).tolist()}
     checker.excuse(near)
     try:
         yield

@@ -297,14 +297,14 @@ class FullRobot:
         q_from = q_from if lead is None else lead
         held = self.params.held_clearance if carrying is not None else 0.0
 
-        def run(i: int, planner: ArmMotionPlanner) -> MotionPlan:
-            return self._arm_plan(planner, q_from, q_to, validity, i, len(planners))
+        def run(i: int, planner: ArmMotionPlanner, timeout: float) -> MotionPlan:
+            return self._arm_plan(planner, q_from, q_to, validity, timeout)
 
         def clear() -> contextlib.AbstractContextManager[None]:
             ends = (q_from, q_to)
             return keeping_clear(checker, self.plan_world, validity.base, ends, self.params, held)
 
-        plan = clear_first(planners, run, clear)
+        plan = clear_first(planners, run, clear, self.params)
         self.plan_seconds += time.perf_counter() - t
         if not plan.success:
             raise SkillStop(Status.NO_MOTION_PLAN, f"{plan.reason}: {plan.detail}", phase)
@@ -316,16 +316,15 @@ class FullRobot:
         q_from: np.ndarray,
         q_to: np.ndarray,
         validity: ArmValidity,
-        i: int,
-        n: int,
+        timeout: float,
     ) -> MotionPlan:
-        """``planner`` (the ``i``-th of ``n`` tried in turn) from ``q_from`` to ``q_to``
-        (torso + arm, (8,)), seeded by the plans made so far."""
+        """``planner``'s plan from ``q_from`` to ``q_to`` (torso + arm, (8,)) within
+        ``timeout`` [s], seeded by the plans made so far."""
         plan = planner.plan(
             dict(zip(ARM_TORSO_JOINTS, q_from.tolist(), strict=True)),
             dict(zip(ARM_TORSO_JOINTS, q_to.tolist(), strict=True)),
             validity,
-            timeout=self.params.planner_timeout(i, n),
+            timeout=timeout,
             seed=self.seed + self.n_plans,
         )
         self.n_plans += 1

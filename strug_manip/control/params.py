@@ -34,6 +34,14 @@ class SkillParams:
         open_speed: TCP speed of opening motions [m/s]: a household pace that the arm
             follows with its speed limits at 70 %.
         probe_speed: TCP speed of the probing motions [m/s].
+        ease_distance: an opening's last this much of TCP travel is its ``ease`` line,
+            slower [m]: the hand runs up to 2.4 cm past the end of a pull at
+            ``open_speed`` (measured: the servos' integral, wound up by the part's
+            damping), so the part reaches the end of its travel, and a stop there,
+            slowly.
+        ease_speed: TCP speed of that ``ease`` line [m/s]: a quarter of the opening's,
+            so a part that meets its stop there meets it with a sixteenth of the
+            energy, and the hand winds up a quarter as far past the end.
         grip_time: time the fingers get to close or open [s]: they close on a handle in
             0.1 s and squeeze with their full force from then on.
         settle_time: hold after a motion before the next phase [s].
@@ -99,6 +107,12 @@ class SkillParams:
             gripper), and a plan that grazed an open drawer pushed it (an elbow on the
             stow after a Place slid the cabinet 1.6 cm; a wrist on the reach knocked a
             drawer shut and slid the cabinet 3 cm).
+        clear_timeout: the OMPL budget per planner of a free motion kept clear
+            (``free_clearance``, ``held_clearance``) [s] (wall), before the plain plans
+            get theirs: the fallback planner (LBKPIECE1) found the demo's carrying
+            reach over an open top drawer with the clearance in 0.85 s (RRTConnect
+            found none in its 0.5 s), and a narrow passage the clearance closes (an
+            arm reaching into a low drawer) costs no more than this.
         cabinet_motion_limit: the cabinet's base more than this from where it stood
             when the skill started (horizontally) stops the skill (status
             ``cabinet_moved``) [m]: a part that does not move the way the robot
@@ -134,6 +148,8 @@ class SkillParams:
     retreat_speed: float = 0.25
     open_speed: float = 0.2
     probe_speed: float = 0.1
+    ease_distance: float = 0.04
+    ease_speed: float = 0.05
     grip_time: float = 0.25
     settle_time: float = 0.15
     drawer_travel: float = 0.25
@@ -155,6 +171,7 @@ class SkillParams:
     free_tolerance: float = 0.2
     held_clearance: float = 0.02
     free_clearance: float = 0.03
+    clear_timeout: float = 1.0
     cabinet_motion_limit: float = 0.03
     settle_limit: float = 2.0
     time_budget: float = 60.0
