@@ -12,7 +12,7 @@ how they move; what decides how a run goes and what it reports is here, once:
   holding the object (:func:`holds`, :func:`keeps_object`);
 - **the stow** after a skill (:func:`plan_stow`, its first part :func:`stow_retreat`,
   seeded by :data:`STOW_SEED`) and the back-off after a stop (:func:`recovery_poses`);
-  free motions keep clear of the cabinet where they can (:func:`keeping_clear`);
+  free motions keep clear of the scene where they can (:func:`keeping_clear`);
 - **the outcome**: the facts measured before (:func:`facts_before`) and after
   (:func:`report`) a run, once the cabinet is at rest (:func:`at_rest`,
   :data:`REST_SPEED`): what a skill reports is where its release and stow left the
@@ -181,7 +181,7 @@ def plan_stow(
             return _plan(planner, start, goal, validity, timeout, seed)
 
         def clear(start: np.ndarray = start) -> contextlib.AbstractContextManager[None]:
-            return keeping_clear(checker, plan_world, base, (start, goal), params, held)
+            return keeping_clear(checker, base, (start, goal), params, held)
 
         res = clear_first(planners, run, clear, params)
         if res.success:
@@ -232,35 +232,37 @@ def _plan(
     )
 
 
-def cabinet_bodies(world: ManipulationWorld) -> list[int]:
-    """Ids of the cabinet's bodies in ``world``'s model (and in its checkers')."""
-    m, prefix = world.model, world.scene.cabinet_prefix
-    return [b for b in range(m.nbody) if m.body(b).name.startswith(prefix)]
+def scene_bodies(checker: ContactChecker) -> list[int]:
+    """Ids of the scene's bodies in ``checker``'s model: neither the robot's, nor the
+    world's (the floor), nor an attached one (the cabinet, the tables, the object
+    where it rests)."""
+    return [b for b in range(1, checker.model.nbody)
+            if not checker.robot[b] and b != checker.attached_body]  # fmt: skip
 
 
 @contextlib.contextmanager
 def keeping_clear(
     checker: ContactChecker,
-    world: ManipulationWorld,
     base: np.ndarray,
     ends: Sequence[np.ndarray],
     params: SkillParams,
     held: float = 0.0,
 ) -> Iterator[None]:
-    """Within the block, ``checker`` (loaded from ``world``) counts the robot's contacts
-    with the cabinet from ``free_clearance`` apart, and an attached object's with
-    anything from ``held`` [m] apart (:meth:`~.contacts.ContactChecker.keep_clear`), except
-    the pairs of geoms already that near where the motion starts or ends (torso + arm
-    ``ends``, each (8,), the base at ``base`` (3,)): those count where they touch.
-    Afterwards the plain check is back.
+    """Within the block, ``checker`` counts the robot's contacts with the scene
+    (:func:`scene_bodies`) from ``free_clearance`` apart, and an attached object's with
+    anything from ``held`` [m] apart (:meth:`~.contacts.ContactChecker.keep_clear`),
+    except the pairs of geoms already that near where the motion starts or ends (torso
+    + arm ``ends``, each (8,), the base at ``base`` (3,)): those count where they
+    touch. Afterwards the plain check is back.
 
     Why: free motions are planned touching-free and the arm follows them a few
     centimetres off (it lags its command, and the checks along an edge are 4 cm
     apart at the gripper), so a plan that grazes a part pushed it: an elbow swept an
     open drawer on the stow after a Place and slid the cabinet, a wrist knocked a
-    drawer shut on the way to place into it.
+    drawer shut on the way to place into it. The tables count too: an arm kept clear
+    of the cabinet alone stowed along the table under it and caught on its edge.
     """
-    bodies = cabinet_bodies(world)
+    bodies = scene_bodies(checker)
     checker.keep_clear_of(bodies, params.free_clearance)
     if held > 0.0:
         checker.keep_clear(held)

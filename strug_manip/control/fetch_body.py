@@ -302,7 +302,7 @@ class FullRobot:
 
         def clear() -> contextlib.AbstractContextManager[None]:
             ends = (q_from, q_to)
-            return keeping_clear(checker, self.plan_world, validity.base, ends, self.params, held)
+            return keeping_clear(checker, validity.base, ends, self.params, held)
 
         plan = clear_first(planners, run, clear, self.params)
         self.plan_seconds += time.perf_counter() - t

@@ -99,7 +99,8 @@ class SkillParams:
             planner finds no such path, the motion is planned as before, touching
             nothing.
         free_clearance: a free motion (the reach, the stow, a recovery) keeps the robot
-            and what it carries this far from the cabinet, but for what is that near
+            and what it carries this far from the scene (the cabinet, the tables, the
+            object where it rests), but for what is that near
             where the motion starts or ends, where it can (else it is planned touching
             nothing, as before) [m]: the arm follows a free motion up to a few
             centimetres off its plan (its joints lag the command by up to 0.04 rad,
