@@ -219,3 +219,41 @@ def test_a_held_object_kept_clear_counts_its_contacts_from_that_distance(checker
     assert checker.free(hand)  # detaching reset the distance
     with pytest.raises(ConfigError, match="distance"):
         checker.keep_clear(-0.01)
+
+
+def test_scene_bodies_kept_clear_count_the_robot_from_a_distance_unless_excused(
+    checker, ik
+) -> None:
+    """``keep_clear_of(bodies, d)``: the hand 1 cm short of the top drawer's front
+    touches nothing, yet counts with 2 cm to keep from the cabinet (the robot's own
+    pairs are unaffected: the tuck stays free); an excused pair counts only where it
+    touches; 0 gives the plain check back."""
+    cabinet = [b for b in range(checker.model.nbody)
+               if checker.model.body(b).name.startswith("cabinet/")]  # fmt: skip
+    tuck = np.concatenate([BASE, TUCK])
+    for x in np.arange(0.90, 1.0, 0.002):  # the fingertips meet the front at 0.955
+        if not checker.free(arm_at(ik, (x, 0.0, 1.06))):
+            break
+    near = arm_at(ik, (x - 0.01, 0.0, 1.06))
+    assert checker.free(near)
+    checker.keep_clear_of(cabinet, 0.02)
+    try:
+        assert checker.free(tuck)
+        assert not checker.free(near)
+        hits = checker.pairs(near)
+        assert len(hits) and all(
+            checker.model.body(int(b)).name.startswith("cabinet/")
+            for b in hits.ravel() if not checker.robot[int(b)]
+        )  # fmt: skip
+        checker.excuse([tuple(p) for p in checker.geom_pairs(near).tolist()])
+        assert checker.free(near)  # within the margin, excused
+        assert not checker.free(arm_at(ik, (x + 0.01, 0.0, 1.06)))  # touching still counts
+        checker.excuse()
+        assert not checker.free(near)
+    finally:
+        checker.keep_clear_of(cabinet, 0.0)
+    assert checker.free(near)
+    with pytest.raises(ConfigError, match="distance"):
+        checker.keep_clear_of(cabinet, -0.01)
+    with pytest.raises(ConfigError, match="scene bodies"):
+        checker.keep_clear_of([checker.body_id("gripper_link")], 0.02)

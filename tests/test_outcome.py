@@ -78,3 +78,30 @@ def test_same_as_ignores_only_the_wall_clock() -> None:
         assert not o.same_as(outcome(**change)), change
     with pytest.raises(dataclasses.FrozenInstanceError):
         o.status = Status.TIMEOUT  # type: ignore[misc]
+
+
+def test_a_run_reports_the_cabinet_once_it_is_at_rest(world) -> None:
+    """:func:`~strug_manip.control.executor.settle`: a cabinet still rocking (tipped
+    toward the robot and let go) is stepped until it is at rest, up to
+    ``settle_limit``; a cabinet at rest is not stepped at all."""
+    from strug_manip.control.executor import at_rest, cabinet_dofs, settle
+    from strug_manip.control.params import DEFAULT_PARAMS
+    from strug_manip.geometry import axis_angle
+
+    world.reset()
+    dofs = cabinet_dofs(world)
+    assert len(dofs) == 6 + len(world.part_joints)
+    t0 = world.data.time
+    settle(world, world.step, 0.01, DEFAULT_PARAMS)
+    assert world.data.time == t0  # at rest: not stepped
+    T = world.cabinet_pose()
+    tipped = T.copy()
+    tipped[:3, :3] = axis_angle(np.array([0.0, 1.0, 0.0]), -0.05) @ T[:3, :3]
+    tipped[2, 3] += 0.01
+    world.set_cabinet_pose(tipped)
+    world.step(0.01)
+    assert not at_rest(world.data.qvel[dofs])  # it falls back
+    settle(world, world.step, 0.01, DEFAULT_PARAMS)
+    assert at_rest(world.data.qvel[dofs])
+    assert world.data.time - t0 < DEFAULT_PARAMS.settle_limit + 0.05
+    world.reset()

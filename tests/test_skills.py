@@ -28,6 +28,7 @@ generator seeds :data:`SLOW_SEEDS`.
 
 from __future__ import annotations
 
+import dataclasses
 import gc
 import itertools
 import math
@@ -59,6 +60,7 @@ from strug_manip.control import (
 from strug_manip.control import twin_rollout as twin_mod
 from strug_manip.control.executor import TUCKED_TOLERANCE
 from strug_manip.control.outcome import SkillStop
+from strug_manip.control.params import DEFAULT_PARAMS
 from strug_manip.control.placement import WHOLE_BODY_LINES
 from strug_manip.domains.manipulation.rules import dragged, inside, open_enough
 from strug_manip.objects.hypotheses import BelievedJoint, believed_spec, cell_joints, model_of
@@ -876,3 +878,31 @@ def test_a_pull_that_slides_the_cabinet_stops_there(sample) -> None:
     assert len(alike) >= 0.8 * len(stopped), (len(alike), len(stopped))
     # The recovery after the stop is guarded too: no single pull drags the cabinet off.
     assert max(r.displacement for r in sample) < 3 * limit
+
+
+def test_an_opening_ends_in_a_slow_ease_line(worlds) -> None:
+    """An opening's pull is two lines: ``move`` at ``open_speed``, then ``ease``, its
+    last ``ease_distance`` at ``ease_speed`` (the part meets a stop there slowly); one
+    path together, the believed joint's positions split with it; a probe stays one
+    line."""
+    world = worlds["drawers_11"]
+    world.reset()
+    link = "link_1"
+    g = _grasp(world, link)
+    joint = world_joint(world, link, "drawer")
+    p = DEFAULT_PARAMS
+    plan = OpenDrawer(g, joint).plan(world, p)
+    lines = {ln.name: ln for ln in plan.lines}
+    move, ease = lines["move"], lines["ease"]
+    names = [ph.name for ph in plan.phases]
+    assert names[names.index("move") + 1] == "ease"
+    assert move.speed == p.open_speed and ease.speed == p.ease_speed
+    assert abs(ease.length - p.ease_distance) < p.line_step
+    whole = OpenDrawer(g, joint).plan(world, dataclasses.replace(p, ease_distance=1.0))
+    (one,) = [ln for ln in whole.lines if ln.name == "move"]
+    assert "ease" not in [ln.name for ln in whole.lines]
+    assert np.allclose(np.concatenate([move.poses, ease.poses]), one.poses)
+    assert np.allclose(np.concatenate([move.part_q, ease.part_q]), one.part_q)
+    assert abs(move.length + ease.length - one.length) < 1e-9
+    probe = PullH(g).plan(world, p)
+    assert "ease" not in [ln.name for ln in probe.lines]

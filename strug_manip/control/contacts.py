@@ -22,6 +22,10 @@ all use it.
   with the gripper are allowed, its contacts with anything else count as the robot's.
 - Other coordinates (the base, the cabinet parts, the object when not held) stay as the
   caller sets them (:meth:`ContactChecker.load`, :meth:`ContactChecker.set`).
+- *Clearance*: scene bodies may count the robot's contacts from a distance
+  (:meth:`ContactChecker.keep_clear_of`: their geoms' margin, so the robot's contacts
+  among themselves stay as they are), and *excused* pairs count only where they touch
+  (:meth:`ContactChecker.excuse`: what a motion starts or ends near).
 """
 
 from __future__ import annotations
@@ -108,6 +112,8 @@ class ContactChecker:
         # Bodies whose contacts count: the robot's, and an attached body.
         self._counts = self.robot.copy()
         self._attached: tuple[int, int, np.ndarray] | None = None  # body, qpos adr, T_g_b
+        # Geom pairs that count only where they touch (not within a margin), either order.
+        self._excused = np.zeros((m.ngeom, m.ngeom), dtype=bool)
 
     def body_id(self, name: str) -> int:
         """Id of the body ``name``; raises :class:`UnknownNameError`."""
@@ -207,6 +213,34 @@ class ContactChecker:
         # The broad phase bounds each body by its largest geom margin, set at compile time.
         self.model.body_margin[bid] = max(distance, float(self._body_margin0[bid]))
 
+    def keep_clear_of(self, bodies: Iterable[int], distance: float) -> None:
+        """Count the robot's (and an attached body's) contacts with the scene bodies
+        ``bodies`` (ids) from ``distance`` [m] apart (0: touching, their default): those
+        bodies' geoms' MuJoCo margin, so pairs within the robot are unaffected.
+
+        Raises:
+            ConfigError: ``distance`` is negative or not finite, or a body belongs to
+                the robot.
+        """
+        if not (math.isfinite(distance) and distance >= 0.0):
+            raise ConfigError(f"distance must be a finite length >= 0 [m], got {distance!r}")
+        ids = np.asarray(list(bodies), dtype=int)
+        if np.any(self.robot[ids]):
+            raise ConfigError("keep_clear_of takes scene bodies, not the robot's")
+        geoms = np.isin(self.geom_body, ids) & (self._env_bits[:, 0] != 0)
+        self.model.geom_margin[geoms] = np.maximum(distance, self._margin0[geoms])
+        self.model.body_margin[ids] = np.maximum(distance, self._body_margin0[ids])
+
+    def excuse(self, pairs: Iterable[tuple[int, int]] = ()) -> ContactChecker:
+        """Replace the excused geom pairs (ids, either order; e.g. :meth:`geom_pairs`):
+        they count only where they touch, not within a margin (:meth:`keep_clear_of`,
+        :meth:`keep_clear`). Geoms, not bodies: a hand near a drawer's side wall where
+        a motion ends is no reason to let it graze the drawer's front on the way."""
+        self._excused[:] = False
+        for a, b in pairs:
+            self._excused[a, b] = self._excused[b, a] = True
+        return self
+
     def _detach(self) -> None:
         if self._attached is None:
             return
@@ -252,13 +286,23 @@ class ContactChecker:
             return np.zeros((0, 2), dtype=int)
         return self._forbidden()
 
-    def _forbidden(self) -> np.ndarray:
+    def _forbidden(self, with_geoms: bool = False) -> np.ndarray:
         bodies = self.geom_body[self.data.contact.geom]
         a, b = bodies[:, 0], bodies[:, 1]
         # (The model's bits leave out the scene's contacts among themselves, except
         # an explicit <pair>: the robot test stays.)
         bad = (self._counts[a] | self._counts[b]) & ~self._allowed[a, b]
-        return bodies[bad]
+        geoms = self.data.contact.geom
+        excused = self._excused[geoms[:, 0], geoms[:, 1]]
+        if excused.any():  # within a margin but not touching
+            bad &= ~(excused & (self.data.contact.dist >= 0.0))
+        return bodies[bad] if not with_geoms else geoms[bad]
+
+    def geom_pairs(self, q: np.ndarray) -> np.ndarray:
+        """Forbidden contacts at ``q`` as geom ids, (k, 2)."""
+        if self._collide(q) == 0:
+            return np.zeros((0, 2), dtype=int)
+        return self._forbidden(with_geoms=True)
 
     def hand_in_scene(self, pairs: np.ndarray) -> bool:
         """Some pair of ``pairs`` (k, 2) (:meth:`pairs`) is the hand against the scene:

@@ -12,15 +12,21 @@ how they move; what decides how a run goes and what it reports is here, once:
   holding the object (:func:`holds`, :func:`keeps_object`);
 - **the stow** after a skill (:func:`plan_stow`, its first part :func:`stow_retreat`,
   seeded by :data:`STOW_SEED`) and the back-off after a stop (:func:`recovery_poses`);
+  free motions keep clear of the scene where they can (:func:`keeping_clear`);
 - **the outcome**: the facts measured before (:func:`facts_before`) and after
-  (:func:`report`) a run.
+  (:func:`report`) a run, once the cabinet is at rest (:func:`at_rest`,
+  :data:`REST_SPEED`): what a skill reports is where its release and stow left the
+  cabinet, not where it was still rocking.
 
 A change to a rule is made here, and both bodies follow it.
 """
 
 from __future__ import annotations
 
+import contextlib
+import math
 import time
+from collections.abc import Callable, Iterator, Sequence
 from typing import Protocol
 
 import numpy as np
@@ -28,7 +34,7 @@ import numpy as np
 from strug_manip.control.contacts import ContactChecker
 from strug_manip.control.context import ControlContext
 from strug_manip.control.grasps import held_grasp
-from strug_manip.control.motion import NO_PLAN, ArmValidity
+from strug_manip.control.motion import NO_PLAN, ArmMotionPlanner, ArmValidity, MotionPlan
 from strug_manip.control.outcome import Outcome, SkillStop, Status
 from strug_manip.control.params import SkillParams
 from strug_manip.control.placement import Placement
@@ -44,6 +50,9 @@ from strug_manip.world.sim import ManipulationWorld
 
 #: Joint distance from the tuck below which the arm counts as tucked [rad or m].
 TUCKED_TOLERANCE = 0.15
+#: A cabinet at rest: every joint of it (the parts, the base's free joint) slower than
+#: this [m/s or rad/s] (a drawer of a tilted cabinet creeping out moves 0.02 m/s).
+REST_SPEED = 0.005
 
 
 class Body(Protocol):
@@ -161,23 +170,113 @@ def plan_stow(
     starts = [] if back is None else [back]
     starts.append(np.zeros((0, len(goal))))
     res = None
+    held = params.held_clearance if checker.attached_body >= 0 else 0.0
+    planners = ctx.planners(plan_world.model)
     for prefix in starts:
         start = prefix[-1] if len(prefix) else q_end
-        planners = ctx.planners(plan_world.model)
-        for i, planner in enumerate(planners):
-            res = planner.plan(
-                dict(zip(ARM_TORSO_JOINTS, start.tolist(), strict=True)),
-                dict(zip(ARM_TORSO_JOINTS, goal.tolist(), strict=True)),
-                validity,
-                timeout=params.planner_timeout(i, len(planners)),
-                seed=seed,
-            )
-            if res.success or res.reason != NO_PLAN:
-                break
+
+        def run(
+            i: int, planner: ArmMotionPlanner, timeout: float, start: np.ndarray = start
+        ) -> MotionPlan:
+            return _plan(planner, start, goal, validity, timeout, seed)
+
+        def clear(start: np.ndarray = start) -> contextlib.AbstractContextManager[None]:
+            return keeping_clear(checker, base, (start, goal), params, held)
+
+        res = clear_first(planners, run, clear, params)
         if res.success:
             return np.vstack([prefix, np.asarray(res.waypoints[1:])])
     assert res is not None
     raise SkillStop(Status.NO_MOTION_PLAN, f"{res.reason}: {res.detail}", "stow")
+
+
+def clear_first(
+    planners: Sequence[ArmMotionPlanner],
+    run: Callable[[int, ArmMotionPlanner, float], MotionPlan],
+    clear: Callable[[], contextlib.AbstractContextManager[None]],
+    params: SkillParams,
+) -> MotionPlan:
+    """The first plan found by ``run(i, planner, timeout)`` (the ``i``-th of
+    ``planners``, its budget ``timeout`` [s]): each planner in turn inside ``clear()``
+    (e.g. :func:`keeping_clear`), its budget capped at ``clear_timeout``, then each in
+    turn again with the plain check and its full budget; a planner's turn ends the
+    round when it succeeds or fails for another reason than its budget."""
+    res = None
+    for keep, cap in ((clear, params.clear_timeout), (contextlib.nullcontext, math.inf)):
+        with keep():
+            for i, planner in enumerate(planners):
+                res = run(i, planner, min(params.planner_timeout(i, len(planners)), cap))
+                if res.success or res.reason != NO_PLAN:
+                    break
+        if res is not None and res.success:
+            break
+    assert res is not None
+    return res
+
+
+def _plan(
+    planner: ArmMotionPlanner,
+    start: np.ndarray,
+    goal: np.ndarray,
+    validity: ArmValidity,
+    timeout: float,
+    seed: int,
+) -> MotionPlan:
+    """``planner``'s torso + arm motion from ``start`` to ``goal`` (8,) in ``timeout`` [s]."""
+    return planner.plan(
+        dict(zip(ARM_TORSO_JOINTS, start.tolist(), strict=True)),
+        dict(zip(ARM_TORSO_JOINTS, goal.tolist(), strict=True)),
+        validity,
+        timeout=timeout,
+        seed=seed,
+    )
+
+
+def scene_bodies(checker: ContactChecker) -> list[int]:
+    """Ids of the scene's bodies in ``checker``'s model: neither the robot's, nor the
+    world's (the floor), nor an attached one (the cabinet, the tables, the object
+    where it rests)."""
+    return [b for b in range(1, checker.model.nbody)
+            if not checker.robot[b] and b != checker.attached_body]  # fmt: skip
+
+
+@contextlib.contextmanager
+def keeping_clear(
+    checker: ContactChecker,
+    base: np.ndarray,
+    ends: Sequence[np.ndarray],
+    params: SkillParams,
+    held: float = 0.0,
+) -> Iterator[None]:
+    """Within the block, ``checker`` counts the robot's contacts with the scene
+    (:func:`scene_bodies`) from ``free_clearance`` apart, and an attached object's with
+    anything from ``held`` [m] apart (:meth:`~.contacts.ContactChecker.keep_clear`),
+    except the pairs of geoms already that near where the motion starts or ends (torso
+    + arm ``ends``, each (8,), the base at ``base`` (3,)): those count where they
+    touch. Afterwards the plain check is back.
+
+    Why: free motions are planned touching-free and the arm follows them a few
+    centimetres off (it lags its command, and the checks along an edge are 4 cm
+    apart at the gripper), so a plan that grazes a part pushed it: an elbow swept an
+    open drawer on the stow after a Place and slid the cabinet, a wrist knocked a
+    drawer shut on the way to place into it. The tables count too: an arm kept clear
+    of the cabinet alone stowed along the table under it and caught on its edge.
+    """
+    bodies = scene_bodies(checker)
+    checker.keep_clear_of(bodies, params.free_clearance)
+    if held > 0.0:
+        checker.keep_clear(held)
+    near = set()
+    for q in ends:
+        near |= {(int(a), int(b)) for a, b in checker.geom_pairs(np.r_[base, q]).tolist()}
+    checker.excuse(near)
+    try:
+        yield
+    finally:
+        checker.excuse()
+        checker.keep_clear_of(bodies, 0.0)
+        if held > 0.0:
+            checker.keep_clear(0.0)
 
 
 def stow_retreat(
@@ -276,6 +375,39 @@ STOW_SEED = 7919
 
 
 # -- the outcome -----------------------------------------------------------------------
+
+
+def cabinet_dofs(world: ManipulationWorld) -> np.ndarray:
+    """Indices into ``qvel`` of the cabinet's joints in ``world``: its base's free
+    joint (6) and every part joint, (6 + n_parts,)."""
+    m = world.model
+    free = m.joint(world.scene.cabinet_prefix + "free")
+    dofs = [np.arange(free.dofadr[0], free.dofadr[0] + 6)]
+    dofs += [m.joint(j).dofadr for j in world.part_joints]
+    return np.concatenate(dofs).astype(int)
+
+
+def at_rest(qvel: np.ndarray) -> bool:
+    """Every cabinet joint velocity of ``qvel`` (:func:`cabinet_dofs`) [m/s or rad/s]
+    is below :data:`REST_SPEED`."""
+    return bool(np.max(np.abs(qvel), initial=0.0) < REST_SPEED)
+
+
+def settle(
+    world: ManipulationWorld, hold: Callable[[float], None], period: float, params: SkillParams
+) -> None:
+    """Step ``world`` by ``hold(period)`` (every command held for ``period`` [s]) while
+    the cabinet still moves (:func:`at_rest`), up to ``settle_limit``, or until the
+    hold stops the run (its time budget): the outcome is measured where the cabinet
+    came to rest. A cabinet at rest already is not stepped at all."""
+    dofs = cabinet_dofs(world)
+    waited = 0.0
+    try:
+        while not at_rest(world.data.qvel[dofs]) and waited < params.settle_limit:
+            hold(period)
+            waited += period
+    except SkillStop:  # the time budget is spent: report the cabinet as it is
+        pass
 
 
 def facts_before(world: ManipulationWorld) -> tuple[dict[str, float], np.ndarray]:

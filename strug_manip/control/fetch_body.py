@@ -35,6 +35,7 @@ state, plan and seed give the same outcome, bit for bit.
 
 from __future__ import annotations
 
+import contextlib
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -43,26 +44,27 @@ import mujoco
 import numpy as np
 
 from planners.errors import ConfigError
-from strug_manip.control.contacts import ContactChecker
 from strug_manip.control.context import ControlContext
-from strug_manip.control.driver import JointDriver
+from strug_manip.control.driver import MONITOR_PERIOD, JointDriver
 from strug_manip.control.executor import (
     STOW_SEED,
     cabinet_slid,
+    clear_first,
     drive_posture,
     facts_before,
     grasp_lost,
     held_back,
     holds,
+    keeping_clear,
     keeps_object,
     near_posture,
     plan_stow,
     recovery_poses,
     report,
+    settle,
     stop_detail,
 )
 from strug_manip.control.motion import (
-    NO_PLAN,
     ArmMotionPlanner,
     ArmValidity,
     MotionPlan,
@@ -293,38 +295,20 @@ class FullRobot:
             bounds = (planners[0].lower, planners[0].upper)
             lead = escape_start(q_from, validity, rng, bounds)
         q_from = q_from if lead is None else lead
-        plan = None
-        if carrying is not None:
-            plan = self._clear_plan(checker, validity, q_from, q_to, len(planners))
-        for i, planner in enumerate(planners if plan is None else ()):
-            plan = self._arm_plan(planner, q_from, q_to, validity, i, len(planners))
-            if plan.success or plan.reason != NO_PLAN:
-                break
+        held = self.params.held_clearance if carrying is not None else 0.0
+
+        def run(i: int, planner: ArmMotionPlanner, timeout: float) -> MotionPlan:
+            return self._arm_plan(planner, q_from, q_to, validity, timeout)
+
+        def clear() -> contextlib.AbstractContextManager[None]:
+            ends = (q_from, q_to)
+            return keeping_clear(checker, validity.base, ends, self.params, held)
+
+        plan = clear_first(planners, run, clear, self.params)
         self.plan_seconds += time.perf_counter() - t
         if not plan.success:
             raise SkillStop(Status.NO_MOTION_PLAN, f"{plan.reason}: {plan.detail}", phase)
         return plan.waypoints[1:] if lead is None else plan.waypoints
-
-    def _clear_plan(
-        self,
-        checker: ContactChecker,
-        validity: ArmValidity,
-        q_from: np.ndarray,
-        q_to: np.ndarray,
-        n: int,
-    ) -> MotionPlan | None:
-        """The first planner's plan from ``q_from`` to ``q_to`` (torso + arm, (8,)) that
-        keeps the carried object ``held_clearance`` from everything but the hand; None
-        where its start or goal is nearer than that, or that planner finds none."""
-        checker.keep_clear(self.params.held_clearance)
-        try:
-            if not (validity.free(q_from) and validity.free(q_to)):
-                return None
-            planner = self.ctx.planners(self.plan_world.model)[0]
-            plan = self._arm_plan(planner, q_from, q_to, validity, 0, n)
-            return plan if plan.success else None
-        finally:
-            checker.keep_clear(0.0)
 
     def _arm_plan(
         self,
@@ -332,16 +316,15 @@ class FullRobot:
         q_from: np.ndarray,
         q_to: np.ndarray,
         validity: ArmValidity,
-        i: int,
-        n: int,
+        timeout: float,
     ) -> MotionPlan:
-        """``planner`` (the ``i``-th of ``n`` tried in turn) from ``q_from`` to ``q_to``
-        (torso + arm, (8,)), seeded by the plans made so far."""
+        """``planner``'s plan from ``q_from`` to ``q_to`` (torso + arm, (8,)) within
+        ``timeout`` [s], seeded by the plans made so far."""
         plan = planner.plan(
             dict(zip(ARM_TORSO_JOINTS, q_from.tolist(), strict=True)),
             dict(zip(ARM_TORSO_JOINTS, q_to.tolist(), strict=True)),
             validity,
-            timeout=self.params.planner_timeout(i, n),
+            timeout=timeout,
             seed=self.seed + self.n_plans,
         )
         self.n_plans += 1
@@ -502,6 +485,7 @@ class FullRobot:
         before: tuple[dict[str, float], np.ndarray],
         t_wall: float,
     ) -> Outcome:
+        settle(self.world, self.drv.hold, MONITOR_PERIOD, self.params)
         mujoco.mj_forward(self.world.model, self.world.data)
         times, qpos = self.drv.recording()
         return report(

@@ -34,6 +34,14 @@ class SkillParams:
         open_speed: TCP speed of opening motions [m/s]: a household pace that the arm
             follows with its speed limits at 70 %.
         probe_speed: TCP speed of the probing motions [m/s].
+        ease_distance: an opening's last this much of TCP travel is its ``ease`` line,
+            slower [m]: the hand runs up to 2.4 cm past the end of a pull at
+            ``open_speed`` (measured: the servos' integral, wound up by the part's
+            damping), so the part reaches the end of its travel, and a stop there,
+            slowly.
+        ease_speed: TCP speed of that ``ease`` line [m/s]: a quarter of the opening's,
+            so a part that meets its stop there meets it with a sixteenth of the
+            energy, and the hand winds up a quarter as far past the end.
         grip_time: time the fingers get to close or open [s]: they close on a handle in
             0.1 s and squeeze with their full force from then on.
         settle_time: hold after a motion before the next phase [s].
@@ -85,10 +93,27 @@ class SkillParams:
             believed cabinet, whose boards perception puts a centimetre or two off,
             and the arm lags its command on the way; a carried object whose end
             grazed a board's front edge turned in the grasp (README), and the
-            Place that followed caught the cell's floor and slid the cabinet. Where
-            the start or the goal is nearer than this (an object just lifted, a pre-place
-            beside an open door), or the first planner finds no such path, the
-            motion is planned as before, touching nothing.
+            Place that followed caught the cell's floor and slid the cabinet. What is
+            nearer than this where the motion starts or ends (an object just lifted, a
+            pre-place beside an open door) counts where it touches; where the first
+            planner finds no such path, the motion is planned as before, touching
+            nothing.
+        free_clearance: a free motion (the reach, the stow, a recovery) keeps the robot
+            and what it carries this far from the scene (the cabinet, the tables, the
+            object where it rests), but for what is that near
+            where the motion starts or ends, where it can (else it is planned touching
+            nothing, as before) [m]: the arm follows a free motion up to a few
+            centimetres off its plan (its joints lag the command by up to 0.04 rad,
+            measured on a stow; the checks along an edge are up to 4.4 cm apart at the
+            gripper), and a plan that grazed an open drawer pushed it (an elbow on the
+            stow after a Place slid the cabinet 1.6 cm; a wrist on the reach knocked a
+            drawer shut and slid the cabinet 3 cm).
+        clear_timeout: the OMPL budget per planner of a free motion kept clear
+            (``free_clearance``, ``held_clearance``) [s] (wall), before the plain plans
+            get theirs: the fallback planner (LBKPIECE1) found the demo's carrying
+            reach over an open top drawer with the clearance in 0.85 s (RRTConnect
+            found none in its 0.5 s), and a narrow passage the clearance closes (an
+            arm reaching into a low drawer) costs no more than this.
         cabinet_motion_limit: the cabinet's base more than this from where it stood
             when the skill started (horizontally) stops the skill (status
             ``cabinet_moved``) [m]: a part that does not move the way the robot
@@ -98,6 +123,11 @@ class SkillParams:
             right model moves it by millimetres, a top flap lifted open by up to 2 cm
             (README): 3 cm leaves room for that and still stops a wrong pull at a
             third of the 0.1 m at which the task counts the cabinet dragged.
+        settle_limit: after a skill the robot holds still, before it reports, while
+            the cabinet still moves (:func:`~.executor.at_rest`), up to this long [s]:
+            what it reports is where the cabinet came to rest. A cabinet the stow
+            tipped by 15 degrees was still rocking when the skill used to report
+            (0.15 s after it), and settled within about a second.
         time_budget: simulated time budget of one skill [s].
         plan_timeout: OMPL time budget per arm motion and planner [s] (wall): an arm
             reaching into a low drawer with the object is a narrow passage that
@@ -119,6 +149,8 @@ class SkillParams:
     retreat_speed: float = 0.25
     open_speed: float = 0.2
     probe_speed: float = 0.1
+    ease_distance: float = 0.04
+    ease_speed: float = 0.05
     grip_time: float = 0.25
     settle_time: float = 0.15
     drawer_travel: float = 0.25
@@ -139,7 +171,10 @@ class SkillParams:
     probe_tolerance: float = 0.02
     free_tolerance: float = 0.2
     held_clearance: float = 0.02
+    free_clearance: float = 0.03
+    clear_timeout: float = 1.0
     cabinet_motion_limit: float = 0.03
+    settle_limit: float = 2.0
     time_budget: float = 60.0
     plan_timeout: float = 4.0
     first_planner_timeout: float = 0.5

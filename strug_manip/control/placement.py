@@ -84,7 +84,7 @@ SHOULDER_FORWARD = 0.0326
 #: Relative cost of base motion in whole-body lines [-].
 BASE_COST = 10.0
 #: Lines whose motion the base may join (the part-moving ones).
-WHOLE_BODY_LINES = ("move", "probe", "withdraw")
+WHOLE_BODY_LINES = ("move", "ease", "probe", "withdraw")
 #: How much longer a planned detour takes than the straight joint-space line [-]
 #: (RRTConnect's simplified paths around the robot's own body and the cabinet).
 DETOUR = 3.0

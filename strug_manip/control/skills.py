@@ -45,6 +45,7 @@ impossible travel) raise :class:`~planners.errors.ConfigError` /
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import ClassVar, Literal
@@ -238,6 +239,7 @@ def _grasp_and_move(
         name, poses, speed, touch=probe_touch, holding=True, part_joint=joint, part_q=part_q,
         tolerance=tol,
     )  # fmt: skip
+    moves = _eased(moving, p) if name == "move" else (moving,)
     end = moving.poses[-1]
     q_end = None if part_q is None else np.full(1, part_q[-1])
     back = retreat_poses(end, p.retreat_distance, p.line_step)
@@ -245,7 +247,7 @@ def _grasp_and_move(
         "retreat", back, p.retreat_speed, touch=probe_touch, part_joint=joint,
         part_q=None if q_end is None else np.repeat(q_end, len(back[0])),
     )  # fmt: skip
-    phases = (approach, Grip(True), moving, Grip(False), retreat)
+    phases = (approach, Grip(True), *moves, Grip(False), retreat)
     away = -g[:3, 0].copy()
     away[2] = 0.0
     if np.linalg.norm(away) > 0.3:  # a level-ish grasp: back away from the front
@@ -257,6 +259,30 @@ def _grasp_and_move(
         )  # fmt: skip
         phases = (*phases, withdraw)
     return SkillPlan(skill, pre, phases, part=link)
+
+
+def _eased(line: Line, p: SkillParams) -> tuple[Line, ...]:
+    """An opening's ``move`` line as two: ``move`` up to ``ease_distance`` of TCP travel
+    before its end, then ``ease``, the rest at ``ease_speed`` (a path no longer than
+    twice that stays one line). The part comes to rest slowly where the opening ends:
+    the arm's servos, wound up by the part's damping at the opening's speed, carry the
+    hand up to 2.4 cm beyond the end of a line, and a part whose stop lies there (a
+    believed limit a centimetre or two too far out) hit it at full speed and tipped the
+    cabinet, which slid the drawer back 6 cm into the carcass as it came down."""
+    n = len(line.poses)
+    k = round(n * p.ease_distance / line.length) if line.length > 0 else 0
+    if line.length <= 2 * p.ease_distance or not 0 < k < n:
+        return (line,)
+    q = line.part_q
+    head = dataclasses.replace(
+        line, poses=line.poses[: n - k], length=line.length * (n - k) / n,
+        part_q=None if q is None else q[: n - k],
+    )  # fmt: skip
+    tail = dataclasses.replace(
+        line, name="ease", poses=line.poses[n - k :], length=line.length * k / n,
+        speed=p.ease_speed, part_q=None if q is None else q[n - k :],
+    )  # fmt: skip
+    return (head, tail)
 
 
 # --- openings -------------------------------------------------------------------------

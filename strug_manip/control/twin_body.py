@@ -40,7 +40,7 @@ the same :class:`~strug_manip.control.outcome.Outcome`:
    where that is free, else the same plan, :func:`~.executor.plan_stow`) until they
    are clear of the cabinet, leave the scene, and the cabinet and the object settle for
    :data:`~.twin_program.COAST_TIME`, and on while the cabinet still moves
-   (:data:`~.twin_rollout.REST_SPEED`), up to the rest of the stow's duration (a drawer
+   (:data:`~.executor.REST_SPEED`), up to the rest of the stow's duration (a drawer
    of a dragged, tilted cabinet creeps on while the full robot stows); everything after
    the last release runs :data:`~.twin_rollout.FREE_COARSENING` times coarser. Where a
    line moves the base, the hand's command moves with the full robot's base as it lags

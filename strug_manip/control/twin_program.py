@@ -34,9 +34,6 @@ PROGRAMS = 32
 #: After its last release the hand leaves the scene (its geoms stop colliding: the full
 #: robot backs away and stows) and the cabinet and object settle for this long [s].
 COAST_TIME = 0.25
-#: A cabinet at rest: every joint of it (the parts, the base's free joint) slower than
-#: this [m/s or rad/s] (a drawer of a tilted cabinet creeping out moves 0.02 m/s).
-REST_SPEED = 0.005
 #: The hand follows the full robot's stow until it is this far from the cabinet's box
 #: for good [m] (the fingers reach 0.1 m past the TCP; the arm's links, which the twin
 #: does not have, seldom sweep the cabinet where the hand does not).

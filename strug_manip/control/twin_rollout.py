@@ -13,6 +13,7 @@ from mujoco import rollout
 import strug_manip.control.timing as timing
 from strug_manip.control.driver import MONITOR_PERIOD
 from strug_manip.control.executor import (
+    REST_SPEED,
     cabinet_slid,
     grasp_lost,
     held_back,
@@ -36,9 +37,6 @@ FREE_COARSENING = 2
 #: something [m] stays parked (:meth:`PlanningTwin._arm_starts_inside`): a link
 #: resting against a door is simulated, one inside a part is not.
 ARM_ENTRY_DEPTH = 0.005
-#: A cabinet at rest: every joint of it (the parts, the base's free joint) slower than
-#: this [m/s or rad/s] (a drawer of a tilted cabinet creeping out moves 0.02 m/s).
-REST_SPEED = 0.005
 #: Where the TCP (the ``gripper`` site) is in the hand's frame [m] (fetch.xml).
 TCP_OFFSET = 0.02
 #: What a rollout's states hold (MuJoCo's full physics: time, qpos, qvel, act, ...).
@@ -263,7 +261,7 @@ class TwinRollout:
         """The scene from rollout state ``start`` with the hand out of it and the arm
         parked, the controls held at ``last`` (1, nu + 7 nmocap): :data:`COAST_TIME`,
         then on in such spans while a cabinet joint still moves faster than
-        :data:`REST_SPEED`, up to ``budget`` steps in all (the rest of the full robot's
+        :data:`~.executor.REST_SPEED`, up to ``budget`` steps in all (the rest of the full robot's
         stow, during which its cabinet goes on settling); the states (n, nstate) from
         ``start`` on, just ``start`` when the cabinet is at rest already (the hand,
         clear of the cabinet by then, held nothing up)."""
