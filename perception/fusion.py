@@ -362,7 +362,7 @@ def front_frame(views: Sequence[ViewParts], max_depth: float | None = MAX_DEPTH)
     # The front's extent: the plane's points and those up to OVERLAY in front of it
     # (overlay fronts, and the face frame they sit on, may cover most of a real front
     # whose largest plane is a blind panel behind the frame).
-    ext = inl | ((ahead > -PLANE_TOL) & (ahead < OVERLAY))
+    ext = (ahead > -PLANE_TOL) & (ahead < OVERLAY)  # holds the plane's inliers
     y0, y1 = _run(local_y[ext])
     if y1 - y0 < MIN_FRONT:  # a broken run: fall back to the inliers' percentiles
         y0, y1 = (float(v) for v in np.percentile(local_y[ext], [1.0, 99.0]))

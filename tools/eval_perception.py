@@ -145,8 +145,11 @@ def true_parts(
                 hinge=p.hinge,
                 rect=rect,
                 axis=R @ p.axis,
-                # A drawer's origin: its closed front's centre (BelievedJoint.of_part).
-                origin=R @ (p.cell_center if p.joint_type == "prismatic" else p.origin) + t,
+                # A movable part's origin as every comparison takes it (a drawer's: its
+                # closed front's centre).
+                origin=BelievedJoint.of_part(p, 0.0, T_world_cab).origin
+                if p.movable
+                else R @ p.origin + t,
                 handle=p.handle,
                 handle_axis=None if p.handle_axis is None else R @ p.handle_axis,
             )
@@ -335,17 +338,18 @@ def evaluate_cabinet(
         if all(rect_iou(tp["rect"], e[1]) < 0.5 or tp["type"] == "fixed" for tp in truth):
             spurious += 1
     support_n = support_ok = 0
+    believed = [  # every particle's movable joints in the world, once
+        BelievedJoint.of_part(part, 0.0, cabinet_pose(p.spec.depth))
+        for p in particles
+        for part in p.spec.parts
+        if part.movable
+    ]
     for tp in truth:
         if tp["type"] == "fixed":
             continue
         support_n += 1
         true = BelievedJoint(tp["type"], tp["axis"], tp["origin"])
-        ok = any(
-            part.movable
-            and same_joint(BelievedJoint.of_part(part, 0.0, cabinet_pose(p.spec.depth)), true)
-            for p in particles
-            for part in p.spec.parts
-        )
+        ok = any(same_joint(b, true) for b in believed)
         support_ok += ok
         if not ok:
             causes["true model not in the particles' support"] += 1
