@@ -283,6 +283,26 @@ class GenerativePOMDP(ABC):
         """
         return True
 
+    def action_prior(
+        self, states: Sequence[Any], weights: Sequence[float], actions: Sequence[Hashable]
+    ) -> Sequence[float] | None:
+        """How promising each of ``actions`` is at a tree node whose particles are
+        ``states`` (live ones only) with ``weights`` (shape ``(N,)``, > 0, not
+        necessarily normalised): one score per action, shape ``(len(actions),)``,
+        dimensionless, higher first.
+
+        The tree solvers try a node's untried actions in the order of these scores (ties
+        keep the order of ``actions``, see :func:`prior_order`), so with a small budget
+        the first simulations go to the actions the task needs (opening the believed
+        target, grasping what is reachable) rather than to whatever comes first in the
+        list. Once every child has a visit, UCB alone decides, so the prior changes
+        which actions a small budget sees, not what a large one converges to.
+
+        Default: None, the list order (every toy domain: their searches are unchanged
+        bit for bit). Must not draw randomness; it is asked once per node expansion.
+        """
+        return None
+
     def obs_loglik_many(self, o: Any, states: list[Any], a: Hashable) -> np.ndarray:
         """``obs_loglik(o, s, a)`` for every ``s`` in ``states``, shape ``(N,)``."""
         return np.array([self.obs_loglik(o, s, a) for s in states], dtype=float)
@@ -411,6 +431,36 @@ def provides_applicable(pomdp: GenerativePOMDP) -> bool:
     """True when ``pomdp``'s class defines its own :meth:`GenerativePOMDP.applicable`
     (the solvers skip the filter on domains where every action always applies)."""
     return type(pomdp).applicable is not GenerativePOMDP.applicable
+
+
+def provides_prior(pomdp: GenerativePOMDP) -> bool:
+    """True when ``pomdp``'s class defines its own :meth:`GenerativePOMDP.action_prior`
+    (the solvers keep the list order, and skip the ranking, on the others)."""
+    return type(pomdp).action_prior is not GenerativePOMDP.action_prior
+
+
+def prior_order(
+    pomdp: GenerativePOMDP,
+    states: Sequence[Any],
+    weights: Sequence[float],
+    actions: Sequence[Hashable],
+    extra: Callable[[Hashable], float] | None = None,
+) -> list[Hashable]:
+    """``actions`` in the order a node tries them while untried: by ``extra(a)`` (a
+    solver's own preference, e.g. STRUG's particle plans; 0 without it), then by
+    ``pomdp.action_prior``, both descending; ties (and a domain without a prior) keep
+    the order of ``actions``. ``states`` and ``weights`` (shape ``(N,)``) are the
+    node's live, weighted particles."""
+    scores = pomdp.action_prior(states, weights, actions)
+    prior = [0.0] * len(actions) if scores is None else [float(x) for x in scores]
+    if len(prior) != len(actions):
+        raise ModelError(
+            f"{type(pomdp).__name__}.action_prior must return one score per action "
+            f"({len(actions)}), got {len(prior)}"
+        )
+    first = [0.0] * len(actions) if extra is None else [float(extra(a)) for a in actions]
+    order = sorted(range(len(actions)), key=lambda j: (-first[j], -prior[j], j))
+    return [actions[j] for j in order]
 
 
 def provides_plan(pomdp: GenerativePOMDP) -> bool:

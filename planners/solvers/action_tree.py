@@ -16,6 +16,15 @@ next. Three answers, chosen by a config's ``widening`` field:
   their parameters explored without paying for the parameters of the others.
 * ``"auto"``: ``"all"`` on a finite action space, else the solver's default.
 
+Untried actions are tried first (UCB gives them no score), in the order the node's
+``rank`` puts them when its children are made: the domain's
+:meth:`~planners.pomdp.GenerativePOMDP.action_prior` over the node's particles
+(:func:`planners.pomdp.prior_order`; STRUG puts its particles' plans first at the root),
+else the action list's order. With a budget of a few simulations per action this decides
+which actions get a visit at all: on a manipulation task the list puts ``Pick`` after
+every part's openings and probes. (DPW and HPW draw new actions one at a time, so there
+is nothing to order; a domain without a prior keeps the list order bit for bit.)
+
 A node offers only the actions its solver's ``keep`` accepts (the domain's
 :meth:`~planners.pomdp.GenerativePOMDP.applicable` in the node's particles): a no-op
 costs a step and is worth the discounted value of its own node, so with a handful of
@@ -24,12 +33,12 @@ visits per action it would win the root by noise alone.
 UCB is :func:`planners.solvers.exploration.ucb_select`: ``Q + c sqrt(log N / n)``
 (``normalized=False``, POMCPOW.jl's ``MaxUCB``) or its scale-free form with Q min-max
 normalised over the node's visited children; unvisited children are tried first, in
-order. A child marked *solved* (:meth:`ActionTree.mark_solved`) competes with its value
-alone, without the exploration term: its value is known exactly, so visiting it again
-cannot teach anything (MCTS-Solver, Winands, Bjornsson & Saito 2008). Storage is flat
-lists indexed by node id; every action node also holds the list of observation
-children (belief-node ids, with repeats) its solver generated under it, so a search
-keeps no per-node list of its own parallel to the tree's.
+the order they were made. A child marked *solved* (:meth:`ActionTree.mark_solved`)
+competes with its value alone, without the exploration term: its value is known
+exactly, so visiting it again cannot teach anything (MCTS-Solver, Winands, Bjornsson &
+Saito 2008). Storage is flat lists indexed by node id; every action node also holds the
+list of observation children (belief-node ids, with repeats) its solver generated under
+it, so a search keeps no per-node list of its own parallel to the tree's.
 """
 
 from __future__ import annotations
@@ -41,7 +50,14 @@ import numpy as np
 
 from planners.belief import ParticleBelief
 from planners.errors import ConfigError, check_positive_float
-from planners.pomdp import ActionSpace, GenerativePOMDP, legal_in, provides_applicable
+from planners.pomdp import (
+    ActionSpace,
+    GenerativePOMDP,
+    legal_in,
+    prior_order,
+    provides_applicable,
+    provides_prior,
+)
 from planners.solvers.exploration import best_index, ucb_select
 
 WIDENING_MODES = ("auto", "all", "dpw", "hpw")
@@ -56,6 +72,13 @@ KEEP_TRIES = 20
 #: ``offers(h, s)``: the actions history node ``h`` offers, reached by state ``s``.
 Offers = Callable[[int, Any], Keep]
 
+#: The order in which a node tries its untried actions: ``rank(actions)`` returns them
+#: reordered (:func:`planners.pomdp.prior_order`).
+Rank = Callable[[list[Hashable]], list[Hashable]]
+
+#: ``ranks(h, s)``: the :data:`Rank` of history node ``h``, reached by state ``s``.
+Ranks = Callable[[int, Any], Rank]
+
 
 def history_offers(pomdp: GenerativePOMDP, belief: ParticleBelief) -> Offers | None:
     """For the solvers whose nodes are histories (POMCP, POMCPOW): ``offers(h, s)``,
@@ -69,6 +92,26 @@ def history_offers(pomdp: GenerativePOMDP, belief: ParticleBelief) -> Offers | N
     root = legal_in(pomdp, belief.states, belief.weights)
     applicable = pomdp.applicable
     return lambda h, s: root if h == 0 else (lambda a: applicable(s, a))
+
+
+def history_ranks(pomdp: GenerativePOMDP, belief: ParticleBelief) -> Ranks | None:
+    """For the solvers whose nodes are histories (POMCP, POMCPOW): ``ranks(h, s)``, the
+    order in which node ``h`` tries its untried actions (the domain's
+    :meth:`~planners.pomdp.GenerativePOMDP.action_prior` over the weighted particles of
+    ``belief`` at the root; deeper, over the state that reaches the node first, as
+    :func:`history_offers` reads it); None on a domain without its own prior (the list
+    order)."""
+    if not provides_prior(pomdp):
+        return None
+    live = [(s, w) for s, w in zip(belief.states, belief.weights.tolist(), strict=True) if w > 0]
+    root_states, root_weights = [s for s, _ in live], [w for _, w in live]
+
+    def ranks(h: int, s: Any) -> Rank:
+        if h == 0:
+            return lambda actions: prior_order(pomdp, root_states, root_weights, actions)
+        return lambda actions: prior_order(pomdp, [s], [1.0], actions)
+
+    return ranks
 
 
 def check_widening(mode: str, k: float, alpha: float) -> None:
@@ -143,13 +186,15 @@ class ActionTree:
             self.space, self.mode, self.k, self.alpha, self.c, self.rng, self.u, self.normalized
         )
 
-    def expand_all(self, h: int, keep: Keep | None = None) -> list[int]:
+    def expand_all(self, h: int, keep: Keep | None = None, rank: Rank | None = None) -> list[int]:
         """Make every action of the finite action set that ``keep`` accepts (all when
-        ``keep`` is None or accepts none) a child of ``h`` (which has none yet); returns
-        its children."""
+        ``keep`` is None or accepts none) a child of ``h`` (which has none yet), in the
+        order ``rank`` puts them (None: the list's); returns its children."""
         actions = self.actions
         if keep is not None:
             actions = [a for a in actions if keep(a)] or actions
+        if rank is not None:
+            actions = rank(list(actions))
         return self.add_children(h, actions)
 
     def add_children(self, h: int, actions: list[Hashable]) -> list[int]:
@@ -212,7 +257,9 @@ class ActionTree:
             children, self.a_q, self.a_n, n_parent, self.c, self.normalized, self._solved
         )
 
-    def select(self, h: int, n_h: int, keep: Keep | None = None) -> tuple[int, int]:
+    def select(
+        self, h: int, n_h: int, keep: Keep | None = None, rank: Rank | None = None
+    ) -> tuple[int, int]:
         """``(action node, schema node or -1)`` to simulate from belief node ``h``.
 
         Args:
@@ -222,11 +269,14 @@ class ActionTree:
                 particles, :func:`planners.pomdp.legal_in`); None offers every action.
                 Read when children are made: the first expansion ("all"), each new
                 draw ("dpw", "hpw": a refused draw is redrawn).
+            rank: the order of the node's untried actions ("all": read once, when its
+                children are made; None: the list's). DPW and HPW draw their actions one
+                at a time and ignore it.
         """
         children = self.b_children[h]
         if self.mode == "all":  # the hot path of POMCP: one call, no detour
             if not children:
-                self.expand_all(h, keep)
+                self.expand_all(h, keep, rank)
             return ucb_select(
                 children, self.a_q, self.a_n, n_h, self.c, self.normalized, self._solved
             ), -1

@@ -19,8 +19,11 @@ as in the paper's Algorithm 2, a plan, or the domain's heuristic) from one of it
 particles (drawn by weight), without bonus.
 
 Actions come from :class:`planners.solvers.action_tree.ActionTree` (HPW by default on
-hybrid action spaces); observations are progressively widened (``k_obs * N(ha) ^
-alpha_obs`` children; a discrete observation seen again reuses its child).
+hybrid action spaces); a node tries its untried actions in the order of the domain's
+:meth:`~planners.pomdp.GenerativePOMDP.action_prior` over its particles (where the domain
+has one; STRUG's particle plans come first at the root, ``root_plans``); observations
+are progressively widened (``k_obs * N(ha) ^ alpha_obs`` children; a discrete
+observation seen again reuses its child).
 
 Particles that reached a terminal state stay in the child they reached it in and drop
 out (weight 0) below it; a node whose particles are all terminal ends the simulation.
@@ -37,8 +40,20 @@ from typing import Any
 import numpy as np
 
 from planners.errors import ConfigError, check_positive_float, check_positive_int
-from planners.pomdp import GenerativePOMDP, legal_in, provides_applicable
-from planners.solvers.action_tree import ActionTree, Keep, check_widening, resolve_widening
+from planners.pomdp import (
+    GenerativePOMDP,
+    legal_in,
+    prior_order,
+    provides_applicable,
+    provides_prior,
+)
+from planners.solvers.action_tree import (
+    ActionTree,
+    Keep,
+    Rank,
+    check_widening,
+    resolve_widening,
+)
 from planners.solvers.base import Budget, SearchInfo, TreeSearchConfig, UniformStream
 from planners.solvers.rollout import check_rollout, make_rollout, plan_return, resolve_rollout
 
@@ -232,6 +247,11 @@ class BeliefTreeSearch:
         terminal_bonus: bonus of a transition that ends the episode, as a function of
             the parent's value (default: none).
         steps_taken: real steps of the episode so far (``horizon="episode"``).
+        root_plans: per root particle ``i``, its uncertainty-free plan (STRUG's matrix
+            plans): on a domain with an :meth:`~planners.pomdp.GenerativePOMDP.action_prior`,
+            the root tries first the actions that begin the plans of the most weight
+            (then the domain's order). None (default): the domain's order alone; a
+            domain without a prior keeps the list order either way.
     """
 
     def __init__(
@@ -246,6 +266,7 @@ class BeliefTreeSearch:
         c: float | None = None,
         terminal_bonus: Callable[[float], float] | None = None,
         steps_taken: int = 0,
+        root_plans: Sequence[Sequence[Hashable]] | None = None,
     ) -> None:
         self.pomdp, self.config, self.rng = pomdp, config, rng
         _, c_default, self.gamma = config.resolved(pomdp)
@@ -266,6 +287,8 @@ class BeliefTreeSearch:
             pomdp, leaf, finite, space, self.depth, self.gamma, rng, self.u
         )
         self.filter = provides_applicable(pomdp)
+        self.prior = provides_prior(pomdp)
+        self.root_plans = root_plans
         self.node_value, self.beta, self.reward_weight = node_value, beta, reward_weight
         self.terminal_bonus = terminal_bonus
         self.with_bonus = node_value is not None and beta > 0.0
@@ -361,10 +384,35 @@ class BeliefTreeSearch:
         weighted particles."""
         return legal_in(self.pomdp, self.states[h], self.weights[h], self.alive[h])
 
+    def ranked(self, h: int) -> Rank:
+        """The order in which node ``h`` tries its untried actions: by the domain's
+        prior over its live, weighted particles (:func:`planners.pomdp.prior_order`);
+        at the root, first by the weight of the particles whose plan (``root_plans``)
+        begins with the action."""
+        pomdp, states, w, alive = self.pomdp, self.states[h], self.weights[h], self.alive[h]
+
+        def rank(actions: list[Hashable]) -> list[Hashable]:
+            live = [i for i, wi in enumerate(w.tolist()) if wi > 0.0 and alive[i]]
+            ls, lw = [states[i] for i in live], [float(w[i]) for i in live]
+            first: dict[Hashable, float] = {}
+            if h == 0 and self.root_plans is not None:
+                for i in live:
+                    plan = self.root_plans[i]
+                    if plan:
+                        first[plan[0]] = first.get(plan[0], 0.0) + float(w[i])
+
+            def planned(a: Hashable) -> float:
+                return first.get(a, 0.0)
+
+            return prior_order(pomdp, ls, lw, actions, planned if first else None)
+
+        return rank
+
     def simulate(self, h: int, d: int) -> float:
         """One descent from belief node ``h`` at depth ``d``; returns its return."""
         tree, nh = self.tree, self.visits[h]
-        anode, snode = tree.select(h, nh, self.offered(h) if self.filter else None)
+        keep = self.offered(h) if self.filter else None
+        anode, snode = tree.select(h, nh, keep, self.ranked(h) if self.prior else None)
         generated = tree.a_children[anode]
         cfg = self.config
         if len(generated) <= cfg.k_obs * tree.a_n[anode] ** cfg.alpha_obs:

@@ -21,7 +21,9 @@ tiger's door can give ``listen`` a value near -330 after two visits; with ``c = 
 fixed term then never returns to it (``-330 + 100 * sqrt(ln 10^4 / 2) < -34``), while
 the normalised term does after a handful of simulations.
 
-In both modes unvisited children are tried first, in order, and a *solved* child (its
+In both modes unvisited children are tried first, in the order of ``children`` (which
+the action tree makes in the order of the domain's action prior, see
+:mod:`planners.solvers.action_tree`), and a *solved* child (its
 value known exactly, see :meth:`ActionTree.mark_solved`) scores its value term alone.
 """
 

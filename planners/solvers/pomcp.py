@@ -32,7 +32,7 @@ import numpy as np
 from planners.belief import ParticleBelief
 from planners.errors import check_positive_float
 from planners.pomdp import GenerativePOMDP, check_pomdp
-from planners.solvers.action_tree import ActionTree, history_offers
+from planners.solvers.action_tree import ActionTree, history_offers, history_ranks
 from planners.solvers.base import (
     Budget,
     RootSampler,
@@ -230,11 +230,12 @@ class POMCPPlanner:
         particles = tree.particles if cfg.reuse_tree else None
 
         offers = history_offers(pomdp, belief)  # None: every action, every node
+        ranks = history_ranks(pomdp, belief)  # None: the list order
 
         def simulate(s: Any, h: int, d: int) -> float:
             nh = b_n[h]
             keep = None if offers is None else offers(h, s)
-            anode, _ = select(h, nh, keep)
+            anode, _ = select(h, nh, keep, None if ranks is None else ranks(h, s))
             s2, o, r, done = step(s, a_action[anode], rng)
             if done or d + 1 >= depth:
                 total = r

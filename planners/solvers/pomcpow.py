@@ -41,6 +41,7 @@ from planners.solvers.action_tree import (
     ActionTree,
     check_widening,
     history_offers,
+    history_ranks,
     resolve_widening,
 )
 from planners.solvers.base import (
@@ -149,11 +150,12 @@ class POMCPOWPlanner:
         rollout = make_rollout(pomdp, cfg.rollout, rollout_actions, space, depth, gamma, rng, u)
 
         offers = history_offers(pomdp, belief)  # None: every action, every node
+        ranks = history_ranks(pomdp, belief)  # None: the list order
 
         def simulate(s: Any, h: int, d: int) -> float:
             nh = b_n[h]
             keep = None if offers is None else offers(h, s)
-            anode, snode = select(h, nh, keep)
+            anode, snode = select(h, nh, keep, None if ranks is None else ranks(h, s))
             a = a_action[anode]
             generated = a_children[anode]
             new_node = False

@@ -5,6 +5,9 @@ matrix (Algorithm 1, :mod:`planners.tru`), then run the belief-tree search of
 :mod:`planners.solvers.belief_tree` with the reward ``R + beta * (TRU(b) - TRU(b'))``,
 TRU computed from the cached matrix and each node's weights over the M particles
 (the paper's approximate incremental TRU). Hybrid action spaces use HPW (Algorithm 3).
+On a domain with an action prior, the root tries its untried actions in the order of the
+weight of the particles whose plan begins with them, then the domain's prior
+(``root_plans`` of :class:`~planners.solvers.belief_tree.BeliefTreeSearch`).
 """
 
 from __future__ import annotations
@@ -86,6 +89,7 @@ class STRUGPlanner(EpisodeSteps):
             node_value=lambda _states, w: matrix.tru(w),
             beta=cfg.beta,
             steps_taken=self.steps_taken,
+            root_plans=matrix.plans,
         )
         action = result.best if result.best is not None else self.pomdp.action_space().sample(rng)
         info = result.search_info(

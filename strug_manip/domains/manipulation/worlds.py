@@ -13,7 +13,9 @@ Caches (bounded, least recently used dropped first):
 * **outcomes**, keyed by (particle, simulation state, action): a skill on a twin is
   deterministic, so a search never simulates the same thing twice;
 * **clouds**, keyed by (particle, the cabinet's joint positions to the millimetre):
-  the point cloud each particle predicts for the belief update.
+  the point cloud each particle predicts for the belief update;
+* **relevance**, keyed by (particle, simulation state): which actions that particle's
+  plan takes next (the tree nodes' action prior).
 """
 
 from __future__ import annotations
@@ -81,6 +83,8 @@ class ParticleWorlds:
         self.outcomes = LRU(OUTCOMES)
         # Whether an action can start in a particle state, where not simulated yet.
         self.can_start = LRU(OUTCOMES)
+        # Per particle state, the task relevance of the actions (the action prior).
+        self.relevance = LRU(OUTCOMES)
         self.clouds = LRU(CLOUDS)
         self.timers = Timers()
 
