@@ -83,6 +83,11 @@ from strug_manip.domains.manipulation.state import (
     ManipState,
     observation_key,
 )
+from strug_manip.domains.manipulation.twin_keys import (
+    TwinConfusion,
+    load_confusion,
+    twin_keys_rule,
+)
 from strug_manip.domains.manipulation.worlds import ParticleWorlds, Timers
 from strug_manip.world.scene import SceneConfig
 from strug_manip.world.sim import CameraFrame, WorldState
@@ -148,6 +153,11 @@ class ManipulationPOMDP(GenerativePOMDP):
         probes: the probe skills offered per part (``Push``, ``PullV``, ``PullH``).
         max_steps: the episode's step limit.
         ctx: the control context the twins share (default: a new one).
+        twin_keys: how the real update weighs the real key's status against a twin's:
+            ``confusion`` (the measured P(real status | twin status), :mod:`.twin_keys`)
+            or ``match`` (:data:`MISMATCH` for any difference); default
+            :func:`.twin_keys.twin_keys_rule` (the ``STRUG_TWIN_KEYS`` environment
+            variable, else :data:`.twin_keys.DEFAULT_TWIN_KEYS`).
 
     Raises:
         ConfigError, UnknownNameError: a bad argument, naming it.
@@ -170,6 +180,7 @@ class ManipulationPOMDP(GenerativePOMDP):
         probes: Sequence[str] = DEFAULT_PROBES,
         max_steps: int = MAX_STEPS,
         ctx: ControlContext | None = None,
+        twin_keys: str | None = None,
     ) -> None:
         if task not in TASK_KINDS:
             raise UnknownNameError("task", task, list(TASK_KINDS))
@@ -181,6 +192,11 @@ class ManipulationPOMDP(GenerativePOMDP):
                 raise UnknownNameError("probe", p, ["Push", "PullV", "PullH"])
         self.probes = tuple(probes)
         self.ctx = ControlContext() if ctx is None else ctx
+        self.twin_keys = twin_keys_rule(twin_keys)
+        #: The real update's status confusion (None: the exact-match rule).
+        self.confusion: TwinConfusion | None = (
+            load_confusion() if self.twin_keys == "confusion" else None
+        )
         self._perceiver: Perceiver | None = None
         self.view: EpisodeView | None = None
         self.worlds: ParticleWorlds | None = None
@@ -359,13 +375,16 @@ class ManipulationPOMDP(GenerativePOMDP):
         return float(self.obs_loglik_many(o, [s_next], a)[0])
 
     def obs_loglik_many(self, o: Any, states: list[Any], a: Hashable) -> np.ndarray:
-        """The key's likelihood per state, times (real observations) the cloud's."""
+        """The key's likelihood per state, times (real observations) the cloud's. A
+        real key's status is weighed by :attr:`confusion` when there is one (a search's
+        keys, twin against twin, by the exact match)."""
         a = self.check_action(a)
         w = self.need_worlds()
         if o.cloud is not None and int(o.key[0]) in BEFORE_MOTION_CODES:  # no evidence
             out = np.zeros(len(states))
         else:
-            out = np.array([key_loglik(o.key, s) for s in states])
+            conf = self.confusion if o.cloud is not None else None
+            out = np.array([key_loglik(o.key, s, conf) for s in states])
         if o.cloud is None or not o.news:
             return out
         t0 = time.perf_counter()
@@ -489,7 +508,7 @@ class ManipulationPOMDP(GenerativePOMDP):
     def report(self) -> dict[str, Any]:
         """Where this episode's time went [s] and the caches' hit rates."""
         w = self.worlds
-        out: dict[str, Any] = {"time": self.timers.as_dict()}
+        out: dict[str, Any] = {"time": self.timers.as_dict(), "twin_keys": self.twin_keys}
         if w is not None:
             out["time"].update({k: v for k, v in w.timers.as_dict().items() if v})
             out["outcome_cache"] = {"hits": w.outcomes.hits, "misses": w.outcomes.misses,
@@ -604,13 +623,20 @@ def perceive(
     return out
 
 
-def key_loglik(key: tuple[float, ...], s: ManipState) -> float:
+def key_loglik(
+    key: tuple[float, ...], s: ManipState, confusion: TwinConfusion | None = None
+) -> float:
     """How likely particle state ``s`` (after the action) makes an observation with
-    ``key``: a mismatched status or grip costs :data:`MISMATCH` each; the handle's
-    motion is Gaussian with one bin's standard deviation per axis."""
+    ``key`` [log]: the status by ``confusion`` (log P(key's status | ``s``'s twin's
+    status)) or, without one, a mismatched status costs :data:`MISMATCH`; a mismatched
+    grip costs :data:`MISMATCH`; the handle's motion is Gaussian with one bin's
+    standard deviation per axis."""
     mine = s.last
     if not mine:
         return 0.0
-    ll = MISMATCH * ((key[0] != mine[0]) + (key[1] != mine[1]))
+    if confusion is None:
+        ll = MISMATCH * ((key[0] != mine[0]) + (key[1] != mine[1]))
+    else:
+        ll = confusion.loglik(mine[0], key[0]) + MISMATCH * (key[1] != mine[1])
     d = np.subtract(key[2:], mine[2:])
     return float(ll - 0.5 * d @ d)

@@ -51,6 +51,9 @@ class ManipulationTask(ManipulationPOMDP):
         belief: ``perception`` (the robot's: particles from its head camera's views) or
             ``true`` (the oracle's, evaluation only: the real cabinet as the only
             particle, taking over the real state after every step; :mod:`.oracle`).
+        twin_keys: how the real update weighs the real key's status against each
+            twin's (``confusion`` or ``match``; :mod:`.twin_keys`; default
+            :func:`.twin_keys.twin_keys_rule`).
 
     Raises:
         ConfigError, UnknownNameError: a bad argument, naming it.
@@ -69,6 +72,7 @@ class ManipulationTask(ManipulationPOMDP):
         objects: Sequence[str | Path] = (),
         target_link: str | None = None,
         belief: str = "perception",
+        twin_keys: str | None = None,
     ) -> None:
         check_positive_int("max_steps", max_steps)
         if belief not in BELIEFS:
@@ -81,7 +85,7 @@ class ManipulationTask(ManipulationPOMDP):
         if cabinet_seed is not None:
             check_positive_int("cabinet_seed", cabinet_seed, allow_zero=True)
         point = None if target is None else world_point("target", target)
-        super().__init__(self.task, particles, probes, max_steps)
+        super().__init__(self.task, particles, probes, max_steps, twin_keys=twin_keys)
         if not (isinstance(views, int) and 1 <= views <= 6):
             raise ConfigError(f"views must be an integer in 1..6, got {views!r}")
         self.cabinet_seed, self.target, self.target_link = cabinet_seed, point, target_link
