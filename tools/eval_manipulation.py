@@ -51,6 +51,11 @@ decomposed into causes a user can act on, per episode the first of (:func:`healt
 * ``out of steps``: none of these, the episode used all its steps;
 * ``other: <cause>``: none of these either (the cause above).
 
+``--twin-keys confusion|match`` chooses how the real belief update weighs the real
+key's status against each twin's (:mod:`strug_manip.domains.manipulation.twin_keys`;
+default the task's), for every episode this run starts; each record's report names the
+rule it ran with (``twin_keys``). Keep one ``--out`` per rule.
+
 ``oracle`` is a solver row like the others (STRUG knowing the cabinet: the bound the
 skills set, :mod:`strug_manip.domains.manipulation.oracle`).
 """
@@ -61,13 +66,14 @@ import argparse
 import collections
 import itertools
 import json
+import os
 import statistics
 import sys
 from collections.abc import Callable
 from pathlib import Path
 
 from strug_manip.domains import MANIPULATION_DOMAINS
-from strug_manip.domains.manipulation import health
+from strug_manip.domains.manipulation import health, twin_keys
 from strug_manip.experiments.bench import BenchSpec, load_results, run_bench, success_table
 from strug_manip.experiments.seeds import seed_range
 
@@ -214,6 +220,9 @@ def idle_steps(records: list[dict]) -> str:
 def report(records: list[dict]) -> str:
     """The text report of ``records`` (one domain or several)."""
     lines = [success_table(records)]
+    rules = collections.Counter(r.get("report", {}).get("twin_keys", "not recorded")
+                                for r in records)  # fmt: skip
+    lines.append("real key rule (twin_keys): " + ", ".join(f"{k} {n}" for k, n in rules.items()))
     groups: dict[tuple[str, str], list[dict]] = collections.defaultdict(list)
     for r in records:
         groups[(r["domain"], r["solver"])].append(r)
@@ -249,7 +258,10 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--workers", type=int, default=1)
     p.add_argument("--report-only", action="store_true", help="run no episode")
     p.add_argument("--json", action="store_true", help="print the range's records as JSON")
+    p.add_argument("--twin-keys", choices=twin_keys.TWIN_KEYS, help="the real key rule")
     args = p.parse_args(argv)
+    if args.twin_keys:  # the bench builds the tasks (in this process or in workers)
+        os.environ[twin_keys.TWIN_KEYS_ENV] = args.twin_keys
     domains = tuple(x for x in args.domains.split(",") if x)
     for d in domains:
         if d not in MANIPULATION_DOMAINS:
