@@ -7,8 +7,9 @@ different statuses in about one run in ten (``docs/skills.md``: 90 % the same st
 The exact-match rule (:data:`.model.MISMATCH`: a different status costs log 0.05,
 whatever the two statuses are) treats every disagreement alike. With
 ``twin_keys="confusion"`` the confusion replaces it in the *real* update only (inside
-a search a twin's key is compared with another twin's, where the exact rule is right): a particle whose twin predicted status ``t`` is weighed
-by ``P(real status | t)``, estimated from full-robot/twin pairs on tuning cabinets
+a search a twin's key is compared with another twin's, where the exact rule is right):
+a particle whose twin predicted status ``t`` is weighed by ``P(real status | t)``,
+estimated from full-robot/twin pairs on tuning cabinets
 (``tools/measure_twin_confusion.py``: the oracle's episodes, where the belief's only
 particle is the true cabinet standing as the real one stands, so its twin's key and
 the real key come from the same cabinet and the same starting state).
