@@ -28,9 +28,7 @@ pull-affordance map show. Each cue leaves the types it rules out with
   face). The handle's centre, in units of the face's half-extents from its centre:
   within :data:`CENTRED` a drawer's (the generator centres them), beyond
   :data:`OFF_CENTRE` a door's (door handles sit 3-6 cm in from the free edge: at least
-  half-way out), but only :data:`EDGE_PULL_EVIDENCE` against a drawer when it is centred
-  across by the top or bottom edge (real furniture raises drawer pulls there); a
-  vertical bar is a side door's (drawer and flap bars are horizontal).
+  half-way out); a vertical bar is a side door's (drawer and flap bars are horizontal).
 * **a closed front without a handle.** If the view shows handles on other fronts, the
   cabinet has handles and this is probably a fixed panel (:data:`PANEL_EVIDENCE` on
   drawer and door, mild: a handle can be missed). If the view shows none, the cabinet
@@ -82,13 +80,6 @@ TILTED_SHARE = 0.5
 MIN_HANDLE_PIXELS = 3
 #: Handle centre offsets (in half-extents of the face) of a drawer's and a door's handle.
 CENTRED, OFF_CENTRE = 0.3, 0.4
-#: Likelihood left to a drawer by a closed front's handle centred across by its top or
-#: bottom edge: a flap's in the plain style; a raised drawer pull's or a side door's top
-#: pull in real furniture (and the furniture style). Chosen among 0.1 (a flap's, as any
-#: off-centre handle), 0.3 and 1.0 (no evidence) on the tuning cabinets with the current
-#: weights (type where the view shows it, 3000:3030 plain / 3100:3130 furniture: 98.9 /
-#: 88.7, 98.9 / 90.2, 98.2 / 89.5%).
-EDGE_PULL_EVIDENCE = 0.3
 #: A front flat on the front plane lies within this of it [m] (median depth).
 FLAT = 0.02
 
@@ -167,10 +158,9 @@ def closed_front_evidence(handle: HandleSeen | None, handles_elsewhere: bool) ->
     if CENTRED <= off <= OFF_CENTRE:
         ev = np.array([g, 1.0, 1.0])
     elif off > OFF_CENTRE and abs(handle.u) < CENTRED and not handle.vertical_bar:
-        # Centred across, by the top or bottom edge: a flap's in the plain style, but
-        # real furniture puts drawer pulls and side doors' pulls there too (41083:
-        # both): weaker evidence against a drawer (EDGE_PULL_EVIDENCE).
-        ev = np.array([g, EDGE_PULL_EVIDENCE, 1.0])
+        # Centred across, by the top or bottom edge: a flap's, but real furniture puts
+        # drawer pulls and side doors' pulls there too (41083: both): no type ruled out.
+        ev = np.array([g, 1.0, 1.0])
     if handle.vertical_bar:
         ev[1] *= g
     return ev

@@ -23,12 +23,7 @@ from perception.fusion import (
     read_instance,
 )
 from perception.instances import Instance, ViewParts
-from perception.joint_cues import (
-    CUE_EVIDENCE,
-    EDGE_PULL_EVIDENCE,
-    HandleSeen,
-    closed_front_evidence,
-)
+from perception.joint_cues import CUE_EVIDENCE, HandleSeen, closed_front_evidence
 
 FRONT = FrontFrame(np.eye(4), 0.8, 0.8, 0.4, True, 1000)
 
@@ -63,10 +58,6 @@ def test_closed_front_handle_cues() -> None:
     assert np.allclose(centred, [g, 1.0, g])  # a drawer's handle
     off = closed_front_evidence(HandleSeen(0.7, 0.0, 0.01, 0.15, 30), True)
     assert off[2] == 1.0 and off[1] <= g * g  # a side door's upright bar, by its free edge
-    # A bar centred across by the top edge: a flap's in the plain style, a raised drawer
-    # pull in real furniture: weaker evidence than an off-centre handle's, not none.
-    top = closed_front_evidence(HandleSeen(0.02, 0.7, 0.15, 0.01, 30), True)
-    assert np.allclose(top, [g, EDGE_PULL_EVIDENCE, 1.0]) and g < EDGE_PULL_EVIDENCE < 1.0
     bare = closed_front_evidence(None, True)
     assert bare[0] > bare[1] == bare[2]  # handles elsewhere: a bare front is a panel
     assert closed_front_evidence(None, False)[0] == g  # no handles anywhere: no panel cue
