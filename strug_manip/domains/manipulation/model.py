@@ -74,6 +74,7 @@ from strug_manip.domains.manipulation.grounding import (
     reward,
     skills,
 )
+from strug_manip.domains.manipulation.plans import plan_candidates, prior_scores, relevance
 from strug_manip.domains.manipulation.rules import BEFORE_MOTION_CODES, open_enough
 from strug_manip.domains.manipulation.state import (
     NOT_APPLICABLE,
@@ -102,19 +103,6 @@ MAX_STEPS = 10
 MAX_PARTICLES = 24
 #: Likelihood of a simulated observation whose status or holding differs [log].
 MISMATCH = math.log(0.05)
-#: Task relevance of an action to one particle (:meth:`ManipulationPOMDP.action_prior`,
-#: dimensionless, summed over a node's particles by weight): the next step of the
-#: particle's plan (open its target part under its own hypothesis; ``Pick`` once the part
-#: is open enough; ``Place`` into it once the object is held; ``Place(table)`` when the
-#: object is held and the part still closed: one hand) ...
-NEXT = 1.0
-#: ... another action on its target part (an opening under another hypothesis, a probe:
-#: what tells the hypotheses apart). Anything else scores 0, later steps of the plan
-#: included: a ``Pick`` while the part is closed costs the ``Place(table)`` that undoes
-#: it, so it must not win ties among actions whose simulations found nothing (measured
-#: on tuning seed 9107: ranked before the other parts' actions it was chosen at value 0
-#: and cycled with ``Place(table)``).
-ON_TARGET = 0.5
 
 
 @dataclass(frozen=True)
@@ -403,90 +391,28 @@ class ManipulationPOMDP(GenerativePOMDP):
         return out + np.array([ll.get(id(c), -1e3) for c in clouds])
 
     def plan_for(self, s: Any, rng: np.random.Generator) -> list[Hashable]:
-        """The uncertainty-free plan of particle ``s``: open the target part under each
-        hypothesis in turn (the particle's own first), then Pick and Place; the first
-        that earns the +10 when simulated on ``s`` (a forward search on that particle),
-        else the own hypothesis's. Steps that ``s`` has done already are left out (the
-        part open enough, the object held). Shelf: Pick, then Place."""
-        k = self.cat.target_index(s.origin)
-        if k is None:
-            return []
-        tail, opened = self._plan_tail(s, k)
-        if opened:
-            return tail
-        own = self._own_hypothesis(s.origin, k)
-        first = None
-        for h in [own, *(h for h in range(len(self.parts[k].hypotheses)) if h != own)]:
-            plan = [self._opening(k, h), *tail]
-            first = first or plan
+        """The uncertainty-free plan of particle ``s`` (:mod:`.plans`): the first of its
+        plans that earns the +10 when simulated on ``s`` (a forward search on that
+        particle), else its own hypothesis's; no search when the part needs no opening."""
+        plans, opened = plan_candidates(self.task, self.cat, s, self._holding, self._open_enough)
+        if opened or not plans:
+            return plans[0] if plans else []
+        for plan in plans:
             if execute_plan(self, s, plan, rng, self.discount)[0] > 0:
                 return plan
-        return first or []
+        return plans[0]
 
     def action_prior(
         self, states: Sequence[Any], weights: Sequence[float], actions: Sequence[Hashable]
     ) -> list[float]:
-        """Task relevance per action, shape ``(len(actions),)``: the sum over the node's
-        particles, by weight, of :data:`NEXT` for the next step of the particle's plan
-        (its own hypothesis's, :meth:`plan_for` without the forward search),
-        :data:`ON_TARGET` for another opening or a probe of its target part, 0 for
-        anything else (other parts; ties keep the list order). With the belief on one
-        target part, its opening under the likeliest hypothesis comes first, then its
-        other openings and probes; once the part is open, ``Pick``; once the object is
-        held, the ``Place`` into it (``Place(table)`` while the part is closed). Cached
-        per particle state (:attr:`.worlds.ParticleWorlds.relevance`)."""
-        w = self.need_worlds()
-        score: dict[Hashable, float] = {}
-        for s, wt in zip(states, weights, strict=True):
-            if s.origin == REAL or wt <= 0.0:
-                continue
-            key = (s.origin, s.sim.key)
-            rel = w.relevance.get(key)
-            if rel is None:
-                rel = self._relevance(s)
-                w.relevance.store(key, rel)
-            for a, v in rel.items():
-                score[a] = score.get(a, 0.0) + wt * v
-        return [score.get(a, 0.0) for a in actions]
+        """Task relevance per action, shape ``(len(actions),)``: :func:`.plans.relevance`
+        summed over the node's particles by weight, cached per particle state."""
 
-    def _relevance(self, s: ManipState) -> dict[ManipAction, float]:
-        """Particle state ``s``'s relevance of the episode's actions (:meth:`action_prior`;
-        the actions it leaves out score 0)."""
-        k = self.cat.target_index(s.origin)
-        if k is None:
-            return {}
-        rel: dict[ManipAction, float] = {
-            a: ON_TARGET
-            for a in self._space.discretized
-            if a.part == k and a.skill not in ("Pick", "Place")
-        }
-        tail, opened = self._plan_tail(s, k)
-        if opened:
-            rel[tail[0]] = NEXT
-        elif tail[0].skill == "Place":  # held, the part closed: put it down to open it
-            rel[ManipAction("Place", TABLE)] = NEXT
-        else:
-            rel[self._opening(k, self._own_hypothesis(s.origin, k))] = NEXT
-        return rel
+        def of(s: ManipState) -> dict[ManipAction, float]:
+            acts = self._space.discretized
+            return relevance(self.task, self.cat, s, acts, self._holding, self._open_enough)
 
-    def _plan_tail(self, s: ManipState, k: int) -> tuple[list[ManipAction], bool]:
-        """The steps of particle state ``s``'s plan after the opening of its target part
-        ``k`` (Pick, then Place into ``k``; without the Pick when the object is held),
-        and whether the part needs no opening (Shelf, or open enough already)."""
-        grasp = "top" if self.task == "opendrawer" else "side"
-        tail = [ManipAction("Pick", grasp=grasp), ManipAction("Place", k)]
-        if self._holding(s):
-            tail = tail[1:]
-        return tail, self.task == "shelf" or self._open_enough(s, k)
-
-    def _own_hypothesis(self, origin: int, k: int) -> int:
-        """The index of model ``origin``'s own kind among part ``k``'s hypotheses."""
-        return self.parts[k].hypotheses.index(self.cat.own_kind(origin, k))
-
-    def _opening(self, k: int, h: int) -> ManipAction:
-        """The opening of part ``k`` under hypothesis ``h`` (a drawer's or a hinge's)."""
-        opening = "OpenDrawer" if self.parts[k].hypotheses[h] == "drawer" else "OpenDoor"
-        return ManipAction(opening, k, h)
+        return prior_scores(states, weights, actions, self.need_worlds().relevance, of)
 
     def format_state(self, s: Any) -> str:
         who = "real" if s.origin == REAL else f"model {s.origin}"
