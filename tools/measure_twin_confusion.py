@@ -39,6 +39,7 @@ from __future__ import annotations
 import argparse
 import datetime
 import json
+import math
 import os
 import subprocess
 import sys
@@ -49,6 +50,7 @@ import numpy as np
 
 from strug_manip.domains import MANIPULATION_DOMAINS
 from strug_manip.domains.manipulation import twin_keys
+from strug_manip.domains.manipulation.model import MISMATCH
 from strug_manip.experiments.bench import BenchSpec, load_results, run_bench
 from strug_manip.experiments.seeds import seed_range
 
@@ -56,10 +58,10 @@ from strug_manip.experiments.seeds import seed_range
 HELD_OUT = 9200
 #: The smoothing the shipped data states (:func:`twin_keys.smoothed`): pseudo-pairs per
 #: row spread as the exact-match rule (about one episode's steps on one status), that
-#: rule's weight of another status (log 0.05, :data:`.model.MISMATCH`), and the least
+#: rule's weight of another status (:data:`.model.MISMATCH`, a log), and the least
 #: probability of any pair.
 PRIOR_STRENGTH = 5.0
-PRIOR_MISMATCH = 0.05
+PRIOR_MISMATCH = round(math.exp(MISMATCH), 12)
 FLOOR = 0.01
 #: The package's data file.
 DEFAULT_OUT = Path(twin_keys.__file__).with_name(twin_keys.DATA_FILE)

@@ -400,11 +400,8 @@ class BeliefTreeSearch:
                     plan = self.root_plans[i]
                     if plan:
                         first[plan[0]] = first.get(plan[0], 0.0) + float(w[i])
-
-            def planned(a: Hashable) -> float:
-                return first.get(a, 0.0)
-
-            return prior_order(pomdp, ls, lw, actions, planned if first else None)
+            planned = (lambda a: first.get(a, 0.0)) if first else None
+            return prior_order(pomdp, ls, lw, actions, planned)
 
         return rank
 

@@ -85,12 +85,9 @@ def relevance(
     rel = {a: ON_TARGET for a in actions if a.part == k and a.skill not in ("Pick", "Place")}
     plans, opened = plan_candidates(task, cat, s, holding, open_enough)
     first = plans[0]
-    if opened:
-        rel[first[0]] = NEXT
-    elif first[1].skill == "Place":  # held, the part closed: put it down to open it
-        rel[ManipAction("Place", TABLE)] = NEXT
-    else:
-        rel[first[0]] = NEXT
+    # Held with the part closed (the opening is followed by Place): put it down first.
+    put_down = not opened and first[1].skill == "Place"
+    rel[ManipAction("Place", TABLE) if put_down else first[0]] = NEXT
     return rel
 
 
