@@ -74,9 +74,10 @@ NO_PLAN = "no plan within budget"
 WALL_CAP_HIT = "wall-clock cap reached before the check budget"
 
 #: Default state validity checks of one planner's search [checks]: RRTConnect finds the
-#: open motions in a few hundred; about 2 s of checking on an idle core (a check of the
-#: Fetch in the cabinet scene costs about 0.1 ms of collision detection plus the
-#: callback's Python).
+#: open motions in a few hundred; about 1.5 s on an idle core (12,000-15,000 checks per
+#: second measured in the demo's scene: MuJoCo's collision detection of the Fetch and
+#: the cabinet, and the callback's Python). The skills set their own
+#: (``SkillParams.plan_checks`` and its kin).
 DEFAULT_CHECKS = 20_000
 #: Default wall-clock safety cap of one planner's search [s]: only a machine many times
 #: slower than the one the budgets were sized on (or a stuck callback) reaches it.
@@ -406,19 +407,24 @@ class _Budget:
 
     def __init__(self, checks: int, cap: float) -> None:
         self.checks, self.cap = checks, cap
-        #: Checks counted so far; 1 while the search runs, else 0 (added per check).
+        #: Checks counted so far, and what a check adds to it: 1 while the search runs,
+        #: 0 before and after (the straight-line check and simplification are free).
         self.used, self.running = 0, 0
         self.deadline = math.inf
         #: The safety cap stopped the search.
         self.capped = False
 
     def start(self) -> None:
+        """The search starts: count its checks, start the safety cap's clock."""
         self.running, self.deadline = 1, time.perf_counter() + self.cap
 
     def stop(self) -> None:
+        """The search ended: checks no longer count."""
         self.running = 0
 
     def spent(self) -> bool:
+        """Whether the search must stop (OMPL asks once per iteration): the checks are
+        spent, or (the safety cap, recorded in :attr:`capped`) the wall time."""
         if self.used >= self.checks:
             return True
         if time.perf_counter() >= self.deadline:
