@@ -149,7 +149,7 @@ def test_place_targets_are_inside_and_open_enough_is_the_targets_rule(cabinets) 
     spec = cabinets["drawers_11"]
     T = np.eye(4)
     t = place_target(spec, "link_1", 0.2, T)
-    assert t.grasp == "top" and t.lift == 0.0
+    assert t.grasp == "top" and t.lift > 0.0  # lowered from above the walls
     assert inside(spec, "link_1", 0.2, T, t.p) and open_enough(spec, "link_1", 0.2, T)
     assert not inside(spec, "link_1", 0.0, T, t.p)  # the drawer took it out with it
     with pytest.raises(ConfigError, match=r"drawer link_1 is out -?0\.0\d\d m"):
@@ -175,13 +175,20 @@ def test_place_targets_are_inside_and_open_enough_is_the_targets_rule(cabinets) 
 
 def test_a_drawer_offers_a_second_place_nearer_its_front_wall(cabinets) -> None:
     """The second target of an open drawer keeps the object inside, CLEARANCE from the
-    front wall (farther from the fronts above); a cell offers one target."""
-    from strug_manip.control.targets import CLEARANCE
+    front wall (farther from the fronts above); both are lowered into from ABOVE_WALLS
+    over the box's walls, then again from place_clearance (lift 0); a cell offers one
+    target."""
+    from strug_manip.control.targets import ABOVE_WALLS
 
     spec, T = cabinets["drawers_11"], np.eye(4)
     part = spec.part("link_1")
     q = 0.9 * part.upper
-    first, second = place_targets(spec, "link_1", q, T)
+    first, second, *low = place_targets(spec, "link_1", q, T)
+    walls = part.point_at(part.interior_center, q)[2] + part.interior_size[2] / 2
+    bottom = first.p[2, 3] - OBJECT_HALF_SIZE[2]
+    assert first.lift == second.lift == pytest.approx(walls + ABOVE_WALLS - bottom)
+    assert [t.lift for t in low] == [0.0, 0.0]
+    assert [t.p.tobytes() for t in low] == [first.p.tobytes(), second.p.tobytes()]
     assert first.grasp == second.grasp == "top"
     np.testing.assert_array_equal(first.p[:3, :3], second.p[:3, :3])
     # The cabinet's x points out of its front: the second is nearer the drawer's front.

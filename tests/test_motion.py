@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import time
 
 import mujoco
 import numpy as np
@@ -29,10 +30,12 @@ from strug_manip.control.motion import (
     GOAL_INVALID,
     NO_PLAN,
     START_INVALID,
+    WALL_CAP_HIT,
     ArmMotionPlanner,
     ArmValidity,
     MotionPlan,
 )
+from strug_manip.control.params import DEFAULT_PARAMS
 from strug_manip.robot.fetch import ARM_TORSO_JOINTS, BASE_JOINTS, TUCK
 from strug_manip.world.sim import ManipulationWorld
 
@@ -187,22 +190,67 @@ def test_plan_around_an_open_drawer_replays_collision_free(world, ctx, q, planne
     check_replays(world, plan)
 
 
-def test_no_plan_within_a_tiny_timeout(world, ctx, q, planner) -> None:
+def test_no_plan_within_a_tiny_check_budget(world, ctx, q, planner) -> None:
+    place_robot(world, q["below"], DRAWER_OPEN)
+    plan = planner.plan(by_name(q["below"]), by_name(q["above"]), validity(ctx, world), checks=5)
+    assert not plan.success and plan.reason == NO_PLAN and WALL_CAP_HIT not in plan.detail
+    assert plan.waypoints.shape == (0, len(ARM_TORSO_JOINTS)) and math.isnan(plan.path_length)
+    # OMPL asks once per iteration, and an iteration checks a whole edge.
+    assert 5 <= plan.checks < 5 + 100
+
+
+def test_the_wall_clock_cap_stops_a_search_and_says_so(world, ctx, q, planner) -> None:
     place_robot(world, q["below"], DRAWER_OPEN)
     plan = planner.plan(
         by_name(q["below"]), by_name(q["above"]), validity(ctx, world), timeout=1e-4
     )
-    assert not plan.success and plan.reason == NO_PLAN
-    assert plan.waypoints.shape == (0, len(ARM_TORSO_JOINTS)) and math.isnan(plan.path_length)
+    assert not plan.success and plan.reason == NO_PLAN and WALL_CAP_HIT in plan.detail
 
 
-def test_same_seed_same_plan(world, ctx, q, planner) -> None:
+#: Added to every check of the slowed search [s]: most of a check's own cost (about
+#: 0.07 ms on an idle core), a machine half as fast.
+DELAY = 5e-5
+
+
+class _Slow:
+    """A validity that answers as ``inner`` does, ``delay`` [s] later per check: the
+    same search on a machine several times slower (or loaded)."""
+
+    def __init__(self, inner: ArmValidity, delay: float) -> None:
+        self.inner, self.delay = inner, delay
+
+    def free(self, x: np.ndarray) -> bool:
+        t = time.perf_counter() + self.delay
+        while time.perf_counter() < t:  # busy: as a slow CPU would
+            pass
+        return self.inner.free(x)
+
+    def contacts(self, x: np.ndarray) -> list[str]:
+        return self.inner.contacts(x)
+
+
+@pytest.mark.parametrize("name", ["RRTConnect", "LBKPIECE1"])
+def test_a_slower_machine_plans_the_same_motion(world, ctx, q, name) -> None:
+    """The budget counts checks, not seconds (issue 37: the demo's episode changed with
+    the machine's load): a search whose every check takes :data:`DELAY` longer makes
+    the same checks and returns the same waypoints, within the skills'
+    budgets (:class:`~strug_manip.control.params.SkillParams`)."""
+    planner = ArmMotionPlanner(world.model, planner=name)
     place_robot(world, q["below"], DRAWER_OPEN)
     v = validity(ctx, world)
-    a = planner.plan(by_name(q["below"]), by_name(q["above"]), v, timeout=3.0, seed=7)
-    b = planner.plan(by_name(q["below"]), by_name(q["above"]), v, timeout=3.0, seed=7)
-    assert a.success and b.success
-    np.testing.assert_array_equal(a.waypoints, b.waypoints)
+    start, goal = by_name(q["below"]), by_name(q["above"])
+    checks = DEFAULT_PARAMS.planner_checks(1, 2)
+    fast = planner.plan(start, goal, v, checks=checks, seed=3)
+    slow = planner.plan(start, goal, _Slow(v, DELAY), checks=checks, seed=3)
+    assert fast.success and fast.checks > 0, (fast.reason, fast.detail)
+    assert slow.planning_time > fast.planning_time + DELAY * fast.checks / 2
+    assert slow.checks == fast.checks
+    np.testing.assert_array_equal(slow.waypoints, fast.waypoints)
+    # A budget the search needs all of fails the same way, however slow.
+    few = max(1, fast.checks // 4)
+    a = planner.plan(start, goal, v, checks=few, seed=3)
+    b = planner.plan(start, goal, _Slow(v, DELAY), checks=few, seed=3)
+    assert (a.success, a.checks, a.reason) == (b.success, b.checks, b.reason)
 
 
 def test_goal_inside_the_cabinet_is_goal_invalid(world, ctx, q, planner) -> None:
@@ -245,6 +293,8 @@ def test_bad_inputs_raise(world, ctx, q, planner) -> None:
         planner.plan({"torso_lift_joint": 0.3}, goal, v)
     with pytest.raises(ConfigError, match=r"timeout.*-1.0"):
         planner.plan(start, goal, v, timeout=-1.0)
+    with pytest.raises(ConfigError, match=r"checks.*0"):
+        planner.plan(start, goal, v, checks=0)
     with pytest.raises(ConfigError, match=r"seed.*-1"):
         planner.plan(start, goal, v, seed=-1)
     with pytest.raises(ConfigError, match="distinct"):

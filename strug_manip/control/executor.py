@@ -24,7 +24,6 @@ A change to a rule is made here, and both bodies follow it.
 from __future__ import annotations
 
 import contextlib
-import math
 import time
 from collections.abc import Callable, Iterator, Sequence
 from typing import Protocol
@@ -176,9 +175,9 @@ def plan_stow(
         start = prefix[-1] if len(prefix) else q_end
 
         def run(
-            i: int, planner: ArmMotionPlanner, timeout: float, start: np.ndarray = start
+            i: int, planner: ArmMotionPlanner, checks: int, start: np.ndarray = start
         ) -> MotionPlan:
-            return _plan(planner, start, goal, validity, timeout, seed)
+            return _plan(planner, start, goal, validity, checks, params.plan_wall_cap, seed)
 
         def clear(start: np.ndarray = start) -> contextlib.AbstractContextManager[None]:
             return keeping_clear(checker, base, (start, goal), params, held)
@@ -192,20 +191,21 @@ def plan_stow(
 
 def clear_first(
     planners: Sequence[ArmMotionPlanner],
-    run: Callable[[int, ArmMotionPlanner, float], MotionPlan],
+    run: Callable[[int, ArmMotionPlanner, int], MotionPlan],
     clear: Callable[[], contextlib.AbstractContextManager[None]],
     params: SkillParams,
 ) -> MotionPlan:
-    """The first plan found by ``run(i, planner, timeout)`` (the ``i``-th of
-    ``planners``, its budget ``timeout`` [s]): each planner in turn inside ``clear()``
-    (e.g. :func:`keeping_clear`), its budget capped at ``clear_timeout``, then each in
-    turn again with the plain check and its full budget; a planner's turn ends the
-    round when it succeeds or fails for another reason than its budget."""
+    """The first plan found by ``run(i, planner, checks)`` (the ``i``-th of
+    ``planners``, its budget ``checks`` validity checks): each planner in turn inside
+    ``clear()`` (e.g. :func:`keeping_clear`), its budget capped at ``clear_checks``,
+    then each in turn again with the plain check and its full budget; a planner's turn
+    ends the round when it succeeds or fails for another reason than its budget."""
     res = None
-    for keep, cap in ((clear, params.clear_timeout), (contextlib.nullcontext, math.inf)):
+    for keep, cap in ((clear, params.clear_checks), (contextlib.nullcontext, None)):
         with keep():
             for i, planner in enumerate(planners):
-                res = run(i, planner, min(params.planner_timeout(i, len(planners)), cap))
+                checks = params.planner_checks(i, len(planners))
+                res = run(i, planner, checks if cap is None else min(checks, cap))
                 if res.success or res.reason != NO_PLAN:
                     break
         if res is not None and res.success:
@@ -219,15 +219,18 @@ def _plan(
     start: np.ndarray,
     goal: np.ndarray,
     validity: ArmValidity,
-    timeout: float,
+    checks: int,
+    wall_cap: float,
     seed: int,
 ) -> MotionPlan:
-    """``planner``'s torso + arm motion from ``start`` to ``goal`` (8,) in ``timeout`` [s]."""
+    """``planner``'s torso + arm motion from ``start`` to ``goal`` (8,) within
+    ``checks`` validity checks (``wall_cap`` [s]: the safety cap)."""
     return planner.plan(
         dict(zip(ARM_TORSO_JOINTS, start.tolist(), strict=True)),
         dict(zip(ARM_TORSO_JOINTS, goal.tolist(), strict=True)),
         validity,
-        timeout=timeout,
+        checks=checks,
+        timeout=wall_cap,
         seed=seed,
     )
 

@@ -297,8 +297,8 @@ class FullRobot:
         q_from = q_from if lead is None else lead
         held = self.params.held_clearance if carrying is not None else 0.0
 
-        def run(i: int, planner: ArmMotionPlanner, timeout: float) -> MotionPlan:
-            return self._arm_plan(planner, q_from, q_to, validity, timeout)
+        def run(i: int, planner: ArmMotionPlanner, checks: int) -> MotionPlan:
+            return self._arm_plan(planner, q_from, q_to, validity, checks)
 
         def clear() -> contextlib.AbstractContextManager[None]:
             ends = (q_from, q_to)
@@ -316,15 +316,16 @@ class FullRobot:
         q_from: np.ndarray,
         q_to: np.ndarray,
         validity: ArmValidity,
-        timeout: float,
+        checks: int,
     ) -> MotionPlan:
         """``planner``'s plan from ``q_from`` to ``q_to`` (torso + arm, (8,)) within
-        ``timeout`` [s], seeded by the plans made so far."""
+        ``checks`` validity checks, seeded by the plans made so far."""
         plan = planner.plan(
             dict(zip(ARM_TORSO_JOINTS, q_from.tolist(), strict=True)),
             dict(zip(ARM_TORSO_JOINTS, q_to.tolist(), strict=True)),
             validity,
-            timeout=timeout,
+            checks=checks,
+            timeout=self.params.plan_wall_cap,
             seed=self.seed + self.n_plans,
         )
         self.n_plans += 1

@@ -24,7 +24,15 @@ generation already started ... will not lead to deterministic sampling" on every
 but the first, which is not true here: the objects created afterwards get the same
 seeds), so :meth:`ArmMotionPlanner.plan` calls it with ``seed + 1`` (a seed of 0 is
 replaced by 1 by OMPL) and then builds a fresh problem, planner and simplifier. The
-same inputs and seed give the same waypoints, bit for bit.
+same inputs and seed give the same waypoints, bit for bit, *whatever the machine's
+load*: the planner's budget is work, not time. It stops after ``checks`` state validity
+checks (counted in the validity callback, through a
+``PlannerTerminationCondition`` OMPL evaluates once per iteration), not after a number
+of seconds: a wall-time budget (``ss.solve(seconds)``) let a loaded machine's planner
+give up where an idle one found a path (or find a different one), and the demo's
+episode changed with the load (issue 37). A wall-clock ``timeout`` stays as a safety
+cap that a normal plan never reaches; a plan it stops says so in ``detail``
+(:data:`WALL_CAP_HIT`), the one way a plan still depends on the clock.
 """
 
 from __future__ import annotations
@@ -60,7 +68,20 @@ ESCAPE_TRIES, ESCAPE_RADIUS = 100, 0.3
 #: Failure reasons of :class:`MotionPlan`.
 START_INVALID = "start invalid"
 GOAL_INVALID = "goal invalid"
-NO_PLAN = "no plan within timeout"
+NO_PLAN = "no plan within budget"
+#: :attr:`MotionPlan.detail` of a plan the wall-clock safety cap stopped before its
+#: check budget was spent (not reproducible on another machine or load).
+WALL_CAP_HIT = "wall-clock cap reached before the check budget"
+
+#: Default state validity checks of one planner's search [checks]: RRTConnect finds the
+#: open motions in a few hundred; about 1.5 s on an idle core (12,000-15,000 checks per
+#: second measured in the demo's scene: MuJoCo's collision detection of the Fetch and
+#: the cabinet, and the callback's Python). The skills set their own
+#: (``SkillParams.plan_checks`` and its kin).
+DEFAULT_CHECKS = 20_000
+#: Default wall-clock safety cap of one planner's search [s]: only a machine many times
+#: slower than the one the budgets were sized on (or a stuck callback) reaches it.
+DEFAULT_WALL_CAP = 60.0
 
 
 def _planners() -> dict[str, type]:
@@ -114,7 +135,10 @@ class MotionPlan:
         reason: ``""`` on success, else :data:`START_INVALID`, :data:`GOAL_INVALID` or
             :data:`NO_PLAN`.
         detail: what made the start or goal invalid (contacts ``body1/body2``, or a
-            joint outside its range), or the planner's status; ``""`` if nothing to add.
+            joint outside its range), or the planner's status (and
+            :data:`WALL_CAP_HIT` if the safety cap stopped it); ``""`` if nothing to add.
+        checks: state validity checks the planner's search made (0 for a straight
+            line or an invalid start or goal) [checks].
     """
 
     success: bool
@@ -124,6 +148,7 @@ class MotionPlan:
     planning_time: float
     reason: str = ""
     detail: str = ""
+    checks: int = 0
 
 
 class ArmMotionPlanner:
@@ -136,7 +161,7 @@ class ArmMotionPlanner:
         planner: OMPL geometric planner name: ``RRTConnect`` (default), ``RRT``,
             ``RRTstar``, ``InformedRRTstar``, ``AORRTC``, ``PRM``, ``PRMstar``,
             ``KPIECE1``, ``BKPIECE1``, ``LBKPIECE1``, ``BITstar``, ``FMT``, ``BFMT``
-            (asymptotically optimal ones use the whole timeout).
+            (asymptotically optimal ones use the whole budget).
         check_resolution: joint-space distance between collision checks along an edge
             [rad or m] (default :data:`CHECK_RESOLUTION`).
         planner_range: the planner's maximum edge length [rad or m] (default: OMPL's
@@ -246,7 +271,8 @@ class ArmMotionPlanner:
         q_goal: Mapping[str, float],
         validity: Validity,
         *,
-        timeout: float = 1.0,
+        checks: int = DEFAULT_CHECKS,
+        timeout: float = DEFAULT_WALL_CAP,
         seed: int = 0,
     ) -> MotionPlan:
         """Plan a collision-free motion of :attr:`joints` from ``q_start`` to ``q_goal``.
@@ -257,7 +283,12 @@ class ArmMotionPlanner:
             validity: what is free: ``free(x)`` and ``contacts(x)`` of a planned
                 configuration ``x`` (n,), e.g. :class:`ArmValidity` over a loaded
                 :class:`~strug_manip.control.contacts.ContactChecker`.
-            timeout: planning time budget [s] (simplification comes on top).
+            checks: the search's budget: it stops after this many state validity
+                checks [checks] (the plan does not depend on the machine's speed or
+                load; the straight-line check and simplification come on top).
+            timeout: wall-clock safety cap of the search [s]: it also stops once this
+                long has passed (``detail`` then says :data:`WALL_CAP_HIT`); set it
+                far above what ``checks`` take, so that it never decides.
             seed: seed of OMPL's random numbers (an int in [0, 2**32 - 2]).
 
         Returns:
@@ -266,30 +297,34 @@ class ArmMotionPlanner:
 
         Raises:
             UnknownNameError: a joint name is not a planned joint.
-            ConfigError: a value is missing or not finite, ``timeout`` is not positive,
-                ``seed`` is not an int in range.
+            ConfigError: a value is missing or not finite, ``checks`` is not an int
+                >= 1, ``timeout`` is not positive, ``seed`` is not an int in range.
         """
-        from ompl import base as ob
-        from ompl import geometric as og
-        from ompl import util as ou
-
         x0 = self._clip_near_limits(self.vector(q_start, "q_start"))
         x1 = self._clip_near_limits(self.vector(q_goal, "q_goal"))
+        if isinstance(checks, bool) or not isinstance(checks, int | np.integer) or checks < 1:
+            raise ConfigError(f"checks must be an int >= 1 (validity checks), got {checks!r}")
         timeout = check_positive_float("timeout", timeout)
         if isinstance(seed, bool) or not isinstance(seed, int | np.integer):
             raise ConfigError(f"seed must be an int, got {seed!r}")
         if not 0 <= int(seed) <= 2**32 - 2:
             raise ConfigError(f"seed must be in [0, 2**32 - 2], got {seed!r}")
-        return self._plan(ob, og, ou, x0, x1, validity, timeout, int(seed))
+        return self._plan(x0, x1, validity, _Budget(int(checks), timeout), int(seed))
 
-    def _plan(self, ob, og, ou, x0, x1, validity: Validity, timeout: float, seed: int):
+    def _plan(
+        self, x0: np.ndarray, x1: np.ndarray, validity: Validity, budget: _Budget, seed: int
+    ) -> MotionPlan:
+        from ompl import base as ob
+        from ompl import geometric as og
+        from ompl import util as ou
+
         t0 = time.perf_counter()
         n = len(self.joints)
 
         def failed(reason: str, detail: str) -> MotionPlan:
             return MotionPlan(
                 False, self.joints, np.zeros((0, n)), math.nan, time.perf_counter() - t0,
-                reason, detail,
+                reason, detail, budget.used,
             )  # fmt: skip
 
         why = self._why_invalid(x0, validity)
@@ -302,32 +337,7 @@ class ArmMotionPlanner:
         with _ompl_quiet("LOG_NONE"):
             ou.RNG.setSeed(seed + 1)  # OMPL replaces 0 by 1; it logs an error after the 1st
         with _ompl_quiet("LOG_WARN"):
-            space = ob.RealVectorStateSpace(n)
-            bounds = ob.RealVectorBounds(n)
-            for i in range(n):
-                bounds.setLow(i, float(self.lower[i]))
-                bounds.setHigh(i, float(self.upper[i]))
-            space.setBounds(bounds)
-            ss = og.SimpleSetup(space)
-            lo, hi = self.lower, self.upper
-
-            def is_valid(state) -> bool:  # OMPL's hot loop: ndarray methods, no wrappers
-                x = np.array(state[0:n])
-                if (x < lo).any() or (x > hi).any():
-                    return False
-                return validity.free(x)
-
-            ss.setStateValidityChecker(is_valid)
-            si = ss.getSpaceInformation()
-            si.setStateValidityCheckingResolution(
-                min(1.0, self.check_resolution / space.getMaximumExtent())
-            )
-            start, goal = space.allocState(), space.allocState()
-            for i in range(n):
-                start[i] = float(x0[i])
-                goal[i] = float(x1[i])
-            ss.setStartAndGoalStates(start, goal)
-            si.setup()
+            ss, si, start, goal = self._setup(ob, og, x0, x1, validity, budget)
             if self.try_straight and si.checkMotion(start, goal):
                 # The straight joint-space line is free: nothing to plan or simplify.
                 q = np.array([x0, x1])
@@ -337,9 +347,12 @@ class ArmMotionPlanner:
                 if self.planner_range is not None and hasattr(planner, "setRange"):
                     planner.setRange(self.planner_range)
                 ss.setPlanner(planner)
-                status = ss.solve(timeout)
+                budget.start()
+                status = ss.solve(ob.PlannerTerminationCondition(budget.spent))
+                budget.stop()
                 if not ss.haveExactSolutionPath():
-                    return failed(NO_PLAN, f"OMPL status: {status.asString()}")
+                    cap = f"; {WALL_CAP_HIT}" if budget.capped else ""
+                    return failed(NO_PLAN, f"OMPL status: {status.asString()}{cap}")
                 path = ss.getSolutionPath()
                 if self.simplify:
                     og.PathSimplifier(si).simplifyMax(path)
@@ -347,7 +360,76 @@ class ArmMotionPlanner:
                 length = float(path.length())
         # Exact start and goal (OMPL copies them; keep the caller's values bit for bit).
         q[0], q[-1] = x0, x1
-        return MotionPlan(True, self.joints, q, length, time.perf_counter() - t0)
+        detail = WALL_CAP_HIT if budget.capped else ""
+        return MotionPlan(
+            True, self.joints, q, length, time.perf_counter() - t0, "", detail, budget.used
+        )
+
+    def _setup(self, ob, og, x0: np.ndarray, x1: np.ndarray, validity: Validity, budget: _Budget):
+        """OMPL's problem from ``x0`` to ``x1`` (a fresh ``SimpleSetup``, its space
+        information, the start and goal states), its validity checks counted by
+        ``budget`` while the search runs."""
+        n = len(self.joints)
+        space = ob.RealVectorStateSpace(n)
+        bounds = ob.RealVectorBounds(n)
+        for i in range(n):
+            bounds.setLow(i, float(self.lower[i]))
+            bounds.setHigh(i, float(self.upper[i]))
+        space.setBounds(bounds)
+        ss = og.SimpleSetup(space)
+        lo, hi = self.lower, self.upper
+
+        def is_valid(state) -> bool:  # OMPL's hot loop: ndarray methods, no wrappers
+            budget.used += budget.running
+            x = np.array(state[0:n])
+            if (x < lo).any() or (x > hi).any():
+                return False
+            return validity.free(x)
+
+        ss.setStateValidityChecker(is_valid)
+        si = ss.getSpaceInformation()
+        si.setStateValidityCheckingResolution(
+            min(1.0, self.check_resolution / space.getMaximumExtent())
+        )
+        start, goal = space.allocState(), space.allocState()
+        for i in range(n):
+            start[i] = float(x0[i])
+            goal[i] = float(x1[i])
+        ss.setStartAndGoalStates(start, goal)
+        si.setup()
+        return ss, si, start, goal
+
+
+class _Budget:
+    """The search's budget: ``checks`` validity checks (counted while it runs), with a
+    wall-clock safety cap of ``cap`` [s]; :meth:`spent` is OMPL's termination
+    condition."""
+
+    def __init__(self, checks: int, cap: float) -> None:
+        self.checks, self.cap = checks, cap
+        #: Checks counted so far, and what a check adds to it: 1 while the search runs,
+        #: 0 before and after (the straight-line check and simplification are free).
+        self.used, self.running = 0, 0
+        self.deadline = math.inf
+        #: The safety cap stopped the search.
+        self.capped = False
+
+    def start(self) -> None:
+        """The search starts: count its checks, start the safety cap's clock."""
+        self.running, self.deadline = 1, time.perf_counter() + self.cap
+
+    def stop(self) -> None:
+        """The search ended: checks no longer count."""
+        self.running = 0
+
+    def spent(self) -> bool:
+        """Whether the search must stop (OMPL asks once per iteration): the checks are
+        spent, or (the safety cap, recorded in :attr:`capped`) the wall time."""
+        if self.used >= self.checks:
+            return True
+        if time.perf_counter() >= self.deadline:
+            self.capped = True
+        return self.capped
 
 
 class Validity(Protocol):

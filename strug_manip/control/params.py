@@ -108,12 +108,14 @@ class SkillParams:
             gripper), and a plan that grazed an open drawer pushed it (an elbow on the
             stow after a Place slid the cabinet 1.6 cm; a wrist on the reach knocked a
             drawer shut and slid the cabinet 3 cm).
-        clear_timeout: the OMPL budget per planner of a free motion kept clear
-            (``free_clearance``, ``held_clearance``) [s] (wall), before the plain plans
-            get theirs: the fallback planner (LBKPIECE1) found the demo's carrying
-            reach over an open top drawer with the clearance in 0.85 s (RRTConnect
-            found none in its 0.5 s), and a narrow passage the clearance closes (an
-            arm reaching into a low drawer) costs no more than this.
+        clear_checks: the OMPL budget per planner of a free motion kept clear
+            (``free_clearance``, ``held_clearance``), before the plain plans get
+            theirs [validity checks] (about 1 s on an idle core, at the 12,000 to
+            15,000 checks per second measured on the demo): the fallback planner
+            (LBKPIECE1) found the demo's carrying reach over an open top drawer with
+            the clearance in 0.85 s (RRTConnect found none in its budget), and a narrow
+            passage the clearance closes (an arm reaching into a low drawer) costs no
+            more than this.
         cabinet_motion_limit: the cabinet's base more than this from where it stood
             when the skill started (horizontally) stops the skill (status
             ``cabinet_moved``) [m]: a part that does not move the way the robot
@@ -129,15 +131,23 @@ class SkillParams:
             tipped by 15 degrees was still rocking when the skill used to report
             (0.15 s after it), and settled within about a second.
         time_budget: simulated time budget of one skill [s].
-        plan_timeout: OMPL time budget per arm motion and planner [s] (wall): an arm
-            reaching into a low drawer with the object is a narrow passage that
-            LBKPIECE1 finds within a second or two on an idle core; twice that leaves
-            room for a loaded machine (the timeout is wall time, not work).
-        first_planner_timeout: the same for the first of several planners
-            (RRTConnect) [s]: it solves the open arm motions in tens of milliseconds and
-            the narrow passages (an arm reaching out of an open drawer) not within
-            ``plan_timeout`` either, where the fallback (LBKPIECE1) takes over; waiting
+        plan_checks: OMPL budget per arm motion and planner [validity checks]
+            (about 4 s on an idle core): an arm reaching into a low drawer with the
+            object is a narrow passage that LBKPIECE1 finds within a second or two.
+            Budgets count work, not wall time, so a skill's motions (and so the
+            episode) are the same on a loaded machine as on an idle one: with
+            seconds, a loaded machine's RRTConnect gave up where an idle one found a
+            path, and the demo's Place went another way (issue 37).
+        first_planner_checks: the same for the first of several planners
+            (RRTConnect) [validity checks] (about 0.5 s on an idle core): it solves the
+            open arm motions in a few hundred to 6,000 checks (the demo's successes)
+            and the narrow passages (an arm reaching out of an open drawer) not within
+            ``plan_checks`` either, where the fallback (LBKPIECE1) takes over; waiting
             the full budget for it made most of the planning twin's time.
+        plan_wall_cap: wall-clock safety cap of one planner's search [s]: far above
+            what ``plan_checks`` take even on a loaded machine (about 4 s idle, twice
+            that with a second process on the core), so that it never decides a plan
+            (:data:`~strug_manip.control.motion.WALL_CAP_HIT` says when it did).
         drive_tolerance: the base is driven only to targets farther than this [m].
         record_period: trajectory recording period [s].
     """
@@ -172,12 +182,13 @@ class SkillParams:
     free_tolerance: float = 0.2
     held_clearance: float = 0.02
     free_clearance: float = 0.03
-    clear_timeout: float = 1.0
+    clear_checks: int = 12_000
     cabinet_motion_limit: float = 0.03
     settle_limit: float = 2.0
     time_budget: float = 60.0
-    plan_timeout: float = 4.0
-    first_planner_timeout: float = 0.5
+    plan_checks: int = 50_000
+    first_planner_checks: int = 6_000
+    plan_wall_cap: float = 60.0
     drive_tolerance: float = 0.02
     record_period: float = 0.02
 
@@ -190,10 +201,13 @@ class SkillParams:
                 raise ConfigError(f"SkillParams.{f.name} must be > 0, got {v!r}")
             if v < 0:
                 raise ConfigError(f"SkillParams.{f.name} must be >= 0, got {v!r}")
+            if f.name.endswith("_checks") and not isinstance(v, int):
+                raise ConfigError(f"SkillParams.{f.name} must be an int (checks), got {v!r}")
 
-    def planner_timeout(self, i: int, n: int) -> float:
-        """The OMPL budget [s] of the ``i``-th of ``n`` planners tried in turn."""
-        return self.first_planner_timeout if i == 0 and n > 1 else self.plan_timeout
+    def planner_checks(self, i: int, n: int) -> int:
+        """The OMPL budget [validity checks] of the ``i``-th of ``n`` planners tried in
+        turn."""
+        return self.first_planner_checks if i == 0 and n > 1 else self.plan_checks
 
 
 #: The parameters every skill uses unless given others.

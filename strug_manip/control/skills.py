@@ -524,7 +524,10 @@ class Place(Skill):
             orientation must be reachable with it (a top grasp: any yaw).
         lift: a level-held object starts this much higher than ``p`` and comes down to
             it on the way in [m] (:func:`~strug_manip.control.targets.place_target`
-            says how much a cell leaves room for); ignored for a top grasp.
+            says how much a cell leaves room for); an object held from above is lowered
+            onto ``p`` from this high, or from ``place_clearance`` if that is higher (a
+            drawer's target asks for more: from above the drawer's cell), and the hand
+            retreats as high.
     """
 
     o: str
@@ -548,11 +551,12 @@ class Place(Skill):
         if not top:
             d[2] = 0.0
             d /= np.linalg.norm(d)
-        clearance = params.place_clearance if top else params.insert_clearance
+        lift = _nonnegative("lift", self.lift)
+        clearance = max(params.place_clearance, lift) if top else params.insert_clearance
         touch = frozenset({self.o})
         above = g.copy()  # level: in at the lifted height, then down inside the cell
         if not top:
-            above[2, 3] += _nonnegative("lift", self.lift)
+            above[2, 3] += lift
         pre = above.copy()
         pre[:3, 3] -= clearance * d
         lines = [

@@ -10,6 +10,11 @@ the first):
   the drawer's front wall as it goes. The box must be out far enough for the object
   and the opened fingers (:data:`FINGER_SPAN`) with :data:`CLEARANCE` all round; the
   object lies along the pull (fingers across the box) where that fits, else across it.
+  It is lowered from :data:`ABOVE_WALLS` over the box's walls (the target's ``lift``):
+  the free motion ends above them, and only the straight, slow line down the middle
+  of the box comes near them; where no base pose reaches that high, the same places
+  follow lowered from ``SkillParams.place_clearance`` (the free motion then ends inside
+  the box).
 - a **cell** (behind an open door, or an open shelf): carried in level from the front
   (``side`` grasp), resting on the cell's floor :data:`INSERT` behind the front; it
   comes in midway up the cell's free opening (up to :data:`MAX_LIFT` above its place),
@@ -55,6 +60,16 @@ FLAP_DROP = FLAP_LOWEST + 0.05 * 0.343
 PALM_ABOVE = 0.0075
 #: Highest start above its place of an object carried into a cell [m].
 MAX_LIFT = 0.15
+#: An object goes into a drawer lowered from with its bottom this far above the top of
+#: the drawer's walls (its interior's top) [m]. Lowered from ``place_clearance`` (0.12
+#: m) above its place, the object started below the walls, so the carrying reach (a
+#: free motion) had to bring it down into the box over a wall: in the demo (issue 37)
+#: perception's box stood 4.8 cm lower than the real one, the reach came in over a side
+#: wall at the 2 cm ``held_clearance`` of the believed one, struck the real wall and,
+#: on the next try, pushed the drawer shut. Lifts of 0.17-0.23 m over the place (0.6-6.6
+#: cm over the believed walls) all placed the demo's object; 0.26 m was out of the
+#: arm's reach over that 1.2 m high drawer: 5 cm, the box's error, within reach.
+ABOVE_WALLS = 0.05
 
 
 @dataclass(frozen=True)
@@ -65,7 +80,8 @@ class PlaceTarget:
         p: ``T_world_object`` of the object resting there, (4, 4) [m].
         grasp: ``top`` or ``side`` (the :class:`~strug_manip.control.skills.Pick` grasp).
         lift: how much higher than ``p`` the placing motion starts [m] (Place's
-            ``lift``).
+            ``lift``): a level object's way in over a cell's floor, a lowered
+            object's drop into a drawer from above its walls (:data:`ABOVE_WALLS`).
     """
 
     p: np.ndarray
@@ -165,11 +181,13 @@ def place_targets(
     try them (the next where :class:`~strug_manip.control.skills.Place` finds no base
     placement: ``ik_infeasible`` stops before any motion).
 
-    A drawer has two: the middle of the part of its box that is out of the carcass,
-    then as near its front wall as the object (and the fingers, when they open along
-    the pull) allow, with :data:`CLEARANCE`: the wrist and forearm above it then stay
-    farther from the fronts and handles of the drawers above (a low drawer, out only
-    15-20 cm, leaves the hand little room in front of them). A cell has one.
+    A drawer has two places: the middle of the part of its box that is out of the
+    carcass, then as near its front wall as the object (and the fingers, when they open
+    along the pull) allow, with :data:`CLEARANCE`: the wrist and forearm above it then
+    stay farther from the fronts and handles of the drawers above (a low drawer, out
+    only 15-20 cm, leaves the hand little room in front of them). Each is lowered into
+    from above the box's walls (:data:`ABOVE_WALLS`), then, where that is out of reach,
+    from ``place_clearance`` (lift 0). A cell has one.
 
     Raises:
         UnknownNameError: no part ``link``.
@@ -203,7 +221,10 @@ def place_targets(
     near_wall = front_wall - CLEARANCE - (half[0] if along else FINGER_SPAN / 2)
     z = center[2] - size[2] / 2 + half[2]
     xs = [middle] + ([near_wall] if near_wall > middle + 1e-3 else [])
-    return tuple(_target(T, np.array([x, center[1], z]), yaw, 0.0, "top", 0.0) for x in xs)
+    lifts = (float(size[2]) + ABOVE_WALLS, 0.0)  # over the walls; else as reach allows
+    return tuple(
+        _target(T, np.array([x, center[1], z]), yaw, 0.0, "top", lift) for lift in lifts for x in xs
+    )
 
 
 def _target(
