@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 
+from perception.parts import Perceiver
 from planners.errors import ConfigError, UnknownNameError
 from planners.solvers import STRUGConfig
 from strug_manip.cli import main
@@ -82,7 +83,13 @@ def test_the_oracle_row_is_a_bound_never_bold():
     assert "| Oracle (STRUG, true model) | 9.00 ± 0.10 |" in table
 
 
-def test_the_oracle_believes_the_real_cabinet_and_takes_over_its_state():
+def test_the_oracle_believes_the_real_cabinet_and_takes_over_its_state(monkeypatch):
+    def no_network(*_args, **_kwargs):
+        raise AssertionError("the oracle ran the perception network")
+
+    # The oracle takes views but believes the true cabinet: the network never runs
+    # (checked directly, not by a wall time that a loaded machine exceeds).
+    monkeypatch.setattr(Perceiver, "perceive", no_network)
     d = make_domain("opendrawer", cabinet_seed=SEED, target_link="link_1", belief="true",
                     max_steps=1)  # fmt: skip
     env = d.environment
@@ -92,7 +99,6 @@ def test_the_oracle_believes_the_real_cabinet_and_takes_over_its_state():
         real = d.real.world
         assert len(belief) == 1 and d.worlds.particles[0].spec is real.scene.cabinet_spec
         assert d.cat.targets == ("link_1",)
-        assert d.report()["time"]["perception"] < 1.0  # took views, ran no network
         obs, _, _ = env.execute(ManipAction("Pick", grasp="top"), np.random.default_rng(2))
         # As if the real robot had nudged the cabinet and a drawer: the particle's twin
         # takes the real state over, whatever it predicted.
