@@ -37,6 +37,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 import pytest
+from mujoco import rollout
 
 from planners.errors import ConfigError, PlannersError, UnknownNameError
 from strug_manip.control import (
@@ -57,7 +58,9 @@ from strug_manip.control import (
     place_target,
     run_batch,
 )
+from strug_manip.control import twin_body as twin_body_mod
 from strug_manip.control import twin_rollout as twin_mod
+from strug_manip.control.base_servo import BaseServo
 from strug_manip.control.executor import TUCKED_TOLERANCE
 from strug_manip.control.outcome import SkillStop
 from strug_manip.control.params import DEFAULT_PARAMS
@@ -665,6 +668,83 @@ def test_what_the_twin_derives_from_a_placement_goes_with_it(worlds) -> None:
     assert len(twin._derived) == 0
     twin.reset()
     assert skill.simulate(twin).same_as(first)  # found anew, the same
+
+
+def test_twins_of_other_cabinets_derive_a_shared_placement_once(worlds, monkeypatch) -> None:
+    """What the twin derives from a placement and the full robot alone (the arm's
+    servos, the base's response, the arm's poses) is derived once for every twin that
+    runs the placement (the particles of a search node, each its own cabinet), and each
+    twin gets the outcome it gets with a context of its own."""
+    world = worlds["mixed_17"]
+    spec, T = world.scene.cabinet_spec, world.scene.T_world_cabinet
+    part = spec.part("link_5")
+    skill = OpenDoor(handle_grasps(part, 0.0, T)[0], BelievedJoint.of_part(part, 0.0, T))
+    other = believed_spec(spec, "link_5", world_joint(world, "link_5", "drawer"), T)
+    believed = ManipulationWorld(world.config)  # the world both particles plan in
+    calls = {"servo": 0, "base": 0}
+    servo, response = twin_body_mod.arm_servo, BaseServo.response
+
+    def count_servo(*args):
+        calls["servo"] += 1
+        return servo(*args)
+
+    def count_response(self, *args):
+        calls["base"] += 1
+        return response(self, *args)
+
+    monkeypatch.setattr(twin_body_mod, "arm_servo", count_servo)
+    monkeypatch.setattr(BaseServo, "response", count_response)
+    ctx = ControlContext()
+    shared = []
+    for s in (spec, other):
+        twin = PlanningTwin(s, world.config, ctx)
+        twin.reset()
+        shared.append(skill.simulate(twin, plan_world=believed))
+    assert calls == {"servo": 1, "base": 1}
+    for s, out in zip((spec, other), shared, strict=True):
+        alone = PlanningTwin(s, world.config, ControlContext())
+        alone.reset()
+        assert skill.simulate(alone, plan_world=believed).same_as(out), out.summary()
+    believed.close()
+
+
+def test_a_runs_head_rolled_out_in_spans_is_one_rollout_cut_at_its_stop(worlds, ctx) -> None:
+    """The twin rolls a run's head out span by span and stops at the span where the
+    monitors stop it: its states are those of one rollout of the whole head, bit for
+    bit, up to there, and its verdict is the one judged on the whole; a run the
+    monitors never stop is rolled out to its end. (A door pulled as a drawer stops; the
+    door opened on its own hinge does not.)"""
+    world = worlds["mixed_17"]
+    spec, T = world.scene.cabinet_spec, world.scene.T_world_cabinet
+    part = spec.part("link_5")
+    grasp = handle_grasps(part, 0.0, T)[0]
+    verdicts = []
+    for skill in (
+        OpenDoor(grasp, BelievedJoint.of_part(part, 0.0, T)),
+        OpenDrawer(grasp, world_joint(world, "link_5", "drawer")),
+    ):
+        twin = PlanningTwin(spec, world.config, ctx)
+        twin.reset()
+        m, d = twin.world.model, twin.world.data
+        twin.cabinet_xy0 = d.qpos[twin._cabinet_xy : twin._cabinet_xy + 2].copy()
+        prog = twin.program(skill.plan(twin.world))
+        twin._start(prog)
+        start = np.empty(mujoco.mj_stateSize(m, twin_mod.ROLLOUT_STATE))
+        mujoco.mj_getState(m, d, start, twin_mod.ROLLOUT_STATE)
+        ctrl = twin.controls(prog)
+        whole, _ = rollout.rollout(m, d, start[None], ctrl[None, : prog.free],
+                                          control_spec=twin_mod.CONTROL)  # fmt: skip
+        mujoco.mj_setState(m, d, start, twin_mod.ROLLOUT_STATE)
+        states, verdict = twin.head(prog, ctrl)
+        assert verdict == twin.judge(prog.steps(slice(0, prog.free)), whole[0])
+        assert np.array_equal(states, whole[0][: len(states)])
+        k = verdict[0]
+        expected = prog.free if verdict[1] is Status.OK else k + 1
+        assert k < len(states) <= max(expected, k + twin_mod.HEAD_SPAN)
+        assert len(states) == prog.free or len(states) % twin_mod.HEAD_SPAN == 0
+        verdicts.append(verdict[1])
+    assert verdicts[0] is Status.OK and verdicts[1] is not Status.OK, verdicts
+    assert len(states) < prog.free  # the stopped run was not simulated to its end
 
 
 def test_the_twins_arm_poses_along_a_path_are_forward_kinematics_to_the_millimetre(

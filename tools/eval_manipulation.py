@@ -56,6 +56,9 @@ key's status against each twin's (:mod:`strug_manip.domains.manipulation.twin_ke
 default the task's), for every episode this run starts; each record's report names the
 rule it ran with (``twin_keys``). Keep one ``--out`` per rule.
 
+``--sims N`` sets the simulations per decision of the episodes this run starts (default
+the tasks' :data:`~strug_manip.domains.MANIPULATION_SIMS`); keep one ``--out`` per budget.
+
 ``oracle`` is a solver row like the others (STRUG knowing the cabinet: the bound the
 skills set, :mod:`strug_manip.domains.manipulation.oracle`).
 """
@@ -259,6 +262,11 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--report-only", action="store_true", help="run no episode")
     p.add_argument("--json", action="store_true", help="print the range's records as JSON")
     p.add_argument("--twin-keys", choices=twin_keys.TWIN_KEYS, help="the real key rule")
+    p.add_argument(
+        "--sims",
+        type=int,
+        help="simulations per decision (default: the tasks' budget, MANIPULATION_SIMS)",
+    )
     args = p.parse_args(argv)
     if args.twin_keys:  # the bench builds the tasks (in this process or in workers)
         os.environ[twin_keys.TWIN_KEYS_ENV] = args.twin_keys
@@ -269,7 +277,8 @@ def main(argv: list[str] | None = None) -> int:
     solvers = tuple(x for x in args.solvers.split(",") if x)
     seeds: range = args.seeds
     if not args.report_only:
-        spec = BenchSpec(domains, solvers, len(seeds), first_seed=seeds.start)
+        overrides = {} if args.sims is None else {"sims": args.sims}
+        spec = BenchSpec(domains, solvers, len(seeds), overrides, first_seed=seeds.start)
         run_bench(spec, args.out, workers=args.workers, resume=True)
     records = [
         r

@@ -65,7 +65,6 @@ import weakref
 
 import mujoco
 import numpy as np
-from mujoco import rollout
 
 from planners.errors import ConfigError
 from strug_manip.cache import LRU
@@ -78,7 +77,7 @@ from strug_manip.control.params import DEFAULT_PARAMS, SkillParams
 from strug_manip.control.placement import Placement, find_placement, work_frame
 from strug_manip.control.plan import SkillPlan
 from strug_manip.control.twin_program import BASE_SPEED, PROGRAMS, Program, TwinPrograms
-from strug_manip.control.twin_rollout import CONTROL, ROLLOUT_STATE, TCP_OFFSET, TwinRollout
+from strug_manip.control.twin_rollout import ROLLOUT_STATE, TCP_OFFSET, TwinRollout
 from strug_manip.control.twin_servo import arm_servo
 from strug_manip.geometry import quat_of
 from strug_manip.objects.generator import CabinetSpec
@@ -355,7 +354,9 @@ class PlanningTwin(TwinPrograms, TwinRollout):
         m = self.world.model
         base, q = placement.start_of(1 if placement.lines else 0)
         whole_body = any(bp is not None for bp in placement.base_paths)
-        axes, kp, force, torque = self._of(  # type: ignore[misc]
+        # The arm's servos depend on the placement alone: every twin that runs it
+        # (the particles of a search node) shares them.
+        axes, kp, force, torque = self.ctx.derived(
             placement, "servo", lambda: arm_servo(self.ctx, base, q, whole_body)
         )
         self._axes = axes
@@ -472,10 +473,10 @@ def _collide(m: mujoco.MjModel, g: int) -> tuple[int, int]:
 def run_batch(
     twins: list[PlanningTwin], plan: SkillPlan, plan_world: ManipulationWorld | None = None
 ) -> list[Outcome]:
-    """Simulate ``plan`` on every twin (e.g. the particles of a search node), batched:
-    the twins whose plans time the same and whose models have the same size run in one
-    :func:`mujoco.rollout.rollout` call (controls computed once). Returns one
-    :class:`Outcome` per twin, as :meth:`PlanningTwin.run` would."""
+    """Simulate ``plan`` on every twin (e.g. the particles of a search node): the twins
+    whose plans time the same share their controls (computed once); each is rolled out
+    on its own (:meth:`~.twin_rollout.TwinRollout.head`, which stops at the monitors'
+    stop). Returns one :class:`Outcome` per twin, as :meth:`PlanningTwin.run` would."""
     outs: list[Outcome | None] = [None] * len(twins)
     groups: dict[tuple, list[tuple[int, Program]]] = {}
     for i, tw in enumerate(twins):
@@ -498,24 +499,13 @@ def run_batch(
     for members in groups.values():
         ts = [twins[i] for i, _ in members]
         prog = members[0][1]
-        states0 = []
-        for tw in ts:
-            st = np.empty(mujoco.mj_stateSize(tw.world.model, ROLLOUT_STATE))
-            mujoco.mj_getState(tw.world.model, tw.world.data, st, ROLLOUT_STATE)
-            states0.append(st)
-        ctrl = ts[0].controls(prog)
-        head = prog.steps(slice(0, prog.free))
-        t = time.perf_counter()
-        states, _ = rollout.rollout(
-            [tw.world.model for tw in ts], ts[0].world.data, np.array(states0),
-            ctrl[None, : prog.free], control_spec=CONTROL,
-        )  # fmt: skip
-        physics = (time.perf_counter() - t) / len(ts)
-        judged = [tw.judge(head, st) for tw, st in zip(ts, states, strict=True)]
-        t = time.perf_counter()
-        after = [tw.after(prog, ctrl, st, j) for tw, st, j in zip(ts, states, judged, strict=True)]
-        physics += (time.perf_counter() - t) / len(ts)
-        for n, ((i, p), tw, st) in enumerate(zip(members, ts, states, strict=True)):
-            tail, final = after[n]
-            outs[i] = tw.finish(p, st, final, tail, tw._t_wall, physics)
+        ctrl = ts[0].controls(prog)  # the same plan and timing: computed once
+        for (i, p), tw in zip(members, ts, strict=True):
+            # One twin at a time, each on its own data: on one core a batched rollout
+            # saves nothing, and a twin's run then stops where its monitors stop it.
+            t = time.perf_counter()
+            states, judged = tw.head(prog, ctrl)
+            tail, final = tw.after(prog, ctrl, states, judged)
+            physics = time.perf_counter() - t
+            outs[i] = tw.finish(p, states, final, tail, tw._t_wall, physics)
     return [o for o in outs if o is not None]

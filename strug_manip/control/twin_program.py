@@ -222,7 +222,7 @@ class TwinPrograms:
             # After the last release the arm moves freely, along its joint path: its
             # links may sweep the cabinet (e.g. back out of a drawer).
             arm = (
-                self._of(placement, ("arm", k), lambda j=joints: self._arm_poses(j))
+                self._shared(placement, ("arm", k), lambda j=joints: self._arm_poses(j))
                 if released
                 else None
             )
@@ -263,11 +263,21 @@ class TwinPrograms:
                       **dict(zip(ARM_TORSO_JOINTS, q.tolist(), strict=True))}  # fmt: skip
             return servo.response(planned, base_inertia(self.ctx.ik.model, joints))
 
-        return self._of(placement, ("base", len(planned)), respond)  # type: ignore[return-value]
+        return self._shared(placement, ("base", len(planned)), respond)  # type: ignore[return-value]
 
     def _parked_arm(self) -> np.ndarray:
         """The arm links' poses (L, 7) out of the scene (:data:`ARM_PARK`)."""
         return np.tile(np.r_[ARM_PARK, 1.0, 0.0, 0.0, 0.0], (len(ARM_LINKS), 1))
+
+    def _shared(self, placement: Placement, key: Hashable, compute: Callable[[], object]) -> object:
+        """What ``compute()`` gave for ``placement`` and ``key`` on any twin with this
+        twin's context, time step and skill constants, else its result
+        (:meth:`~.context.ControlContext.derived`): for what depends on the placement and
+        the full robot alone, not on the twin's cabinet (the arm's poses along its
+        joint path, the base's response), so the particles of a search node derive it
+        once rather than once each."""
+        dt = self.world.model.opt.timestep
+        return self.ctx.derived(placement, ("twin", key, dt, self.params), compute)
 
     def _of(self, placement: Placement, key: Hashable, compute: Callable[[], object]) -> object:
         """What ``compute()`` gave for ``placement`` and ``key`` before, else its result,
@@ -349,13 +359,11 @@ class TwinPrograms:
             return None
         stow, goal = found
         dt = self.world.model.opt.timestep
-        base, q_end = placement.start_of(len(placement.lines))
         if not len(stow):
             return Stow(np.zeros((0, 3)), np.zeros((0, 4)), np.zeros((0, len(ARM_LINKS), 7)), 0)
-        pts = timing.polyline(q_end, list(stow))
-        T = timing.duration(pts, self.vmax, 0.3)
-        qs = timing.samples(pts, T, dt, self.vmax)
-        tcp, arm = self._fk_along(np.hstack([np.repeat(base[None], len(qs), axis=0), qs]))
+        tcp, arm = self._shared(  # type: ignore[misc]
+            placement, ("stow", self._token(pw)), lambda: self._stow_poses(placement, stow)
+        )
         if goal is not None:  # the rest: as long as the straight line on to the goal
             rest = timing.duration(timing.polyline(stow[-1], [goal]), self.vmax, 0.3)
             return Stow(tcp[:, :3].copy(), tcp[:, 3:].copy(), arm, round(rest / dt))
@@ -363,10 +371,20 @@ class TwinPrograms:
         # them) near the cabinet.
         mid = 0.5 * (arm[:, 1:, :3] + arm[:, :-1, :3])
         points = np.concatenate([tcp[:, None, :3], arm[:, :, :3], mid], axis=1)
-        near = self._near_cabinet(points.reshape(-1, 3)).reshape(len(qs), -1).any(axis=1)
+        near = self._near_cabinet(points.reshape(-1, 3)).reshape(len(tcp), -1).any(axis=1)
         n = int(np.flatnonzero(near)[-1]) + 2 if near.any() else 1
         n = min(n, len(tcp))
-        return Stow(tcp[:n, :3].copy(), tcp[:n, 3:].copy(), arm[:n], len(qs) - n)
+        return Stow(tcp[:n, :3].copy(), tcp[:n, 3:].copy(), arm[:n], len(tcp) - n)
+
+    def _stow_poses(self, placement: Placement, stow: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The TCP's poses (n, 7) and the arm links' (n, L, 7) every step along the
+        stow's joint path ``stow`` (k, 8) (torso + arm) from the placement's end, on
+        the full robot's timing."""
+        base, q_end = placement.start_of(len(placement.lines))
+        pts = timing.polyline(q_end, list(stow))
+        T = timing.duration(pts, self.vmax, 0.3)
+        qs = timing.samples(pts, T, self.world.model.opt.timestep, self.vmax)
+        return self._fk_along(np.hstack([np.repeat(base[None], len(qs), axis=0), qs]))
 
     def _near_cabinet(self, points: np.ndarray) -> np.ndarray:
         """Which ``points`` (n, 3) lie within :data:`STOW_CLEARANCE` of the cabinet's

@@ -50,6 +50,14 @@ CONTROL = int(
     | mujoco.mjtState.mjSTATE_MOCAP_POS
     | mujoco.mjtState.mjSTATE_MOCAP_QUAT
 )
+#: Steps of a run's head (up to the last release) rolled out between two judgements
+#: (:meth:`TwinRollout.head`) [-]: 0.25 s at the twin's 5 ms step. Shorter spans skip
+#: more of the steps after a stop and cost more calls; on a search's runs (OpenDrawer,
+#: seed 9100) one run in six stops early, mostly at the grasp, and the steps after
+#: its stop were 12 % of all head steps.
+HEAD_SPAN = 50
+#: A run's verdict: the step it ends at, its status, why (one line) and the phase.
+Judged = tuple[int, Status, str, str]
 
 
 class TwinRollout:
@@ -130,38 +138,91 @@ class TwinRollout:
         mquat[:, self._arm_mocap] = (1.0, 0.0, 0.0, 0.0)
         return out
 
-    def judge(self, prog: Program, states: np.ndarray) -> tuple[int, Status, str, str]:
+    def head(self, prog: Program, ctrl: np.ndarray) -> tuple[np.ndarray, Judged]:
+        """Roll out the program's steps before ``prog.free`` from the twin's current
+        state (``ctrl``: the whole program's controls, (nstep, nu + 7 nmocap)), in
+        spans of :data:`HEAD_SPAN` steps, each judged as it comes (:meth:`judge`), up to
+        the span in which the monitors stop the run: the steps after a stop are
+        thrown away (the recovery starts at the stop), so they need not be simulated.
+        Each span starts with the solver's warm start where the last ended, so the
+        states are those of one rollout of the whole head, bit for bit. Returns the
+        states (n, nstate) and the verdict."""
+        m, d = self.world.model, self.world.data
+        head = prog.steps(slice(0, prog.free))
+        monitored = self._monitored(head)
+        start = np.empty(mujoco.mj_stateSize(m, ROLLOUT_STATE))
+        mujoco.mj_getState(m, d, start, ROLLOUT_STATE)
+        parts: list[np.ndarray] = []
+        warm = None  # a rollout's first step starts cold
+        for c in range(0, prog.free, HEAD_SPAN):
+            span = ctrl[None, c : min(c + HEAD_SPAN, prog.free)]
+            st, _ = rollout.rollout(m, d, start[None], span,
+                                    control_spec=CONTROL, initial_warmstart=warm)  # fmt: skip
+            parts.append(st[0])
+            stop = self._first_stop(head, monitored, st[0], c)
+            if stop is not None:
+                return np.concatenate(parts), stop
+            start, warm = st[0][-1], d.qacc_warmstart[None].copy()
+        states = np.concatenate(parts)
+        return states, (len(states) - 1, Status.OK, "", "")
+
+    def judge(self, prog: Program, states: np.ndarray) -> Judged:
         """The first step whose monitors stop the run (a lost grasp where the fingers
         should hold, the cabinet slid more than ``cabinet_motion_limit`` since the
         skill started, the hand more than the tracking tolerance behind its command,
-        checked every 10 ms as on the full robot) and why; the last step if none."""
+        checked every 10 ms as on the full robot) and why; the last step if none.
+        ``states``: the rollout's state after each of the program's steps, (nstep,
+        nstate)."""
+        stop = self._first_stop(prog, self._monitored(prog), states, 0)
+        return (len(states) - 1, Status.OK, "", "") if stop is None else stop
+
+    def _monitored(self, prog: Program) -> tuple[np.ndarray, np.ndarray]:
+        """Per step of ``prog``, (nstep,) each: whether the monitors check there (every
+        :data:`~.driver.MONITOR_PERIOD`, where a phase changes, at the last step), and
+        whether the tracking rule may stop it there (not inside a hold)."""
+        n, every = len(prog.pos), self._check_every()
+        check = np.zeros(n, dtype=bool)
+        check[every - 1 :: every] = True
+        check[prog.phase_ends] = True
+        check[-1] = True
+        holds = prog.holds
+        return check, ~holds | np.r_[holds[1:] != holds[:-1], False]
+
+    def _first_stop(
+        self,
+        prog: Program,
+        monitored: tuple[np.ndarray, np.ndarray],
+        states: np.ndarray,
+        offset: int,
+    ) -> Judged | None:
+        """:meth:`judge` on the states (n, nstate) after the program's steps
+        ``offset .. offset + n - 1`` (``monitored``: :meth:`_monitored`): the first of
+        them at which a monitor stops the run (its step index in the program) and
+        why, or None. Every rule is decided at its step from that step's state (and
+        the program), so a span is judged as the whole would be."""
         m = self.world.model
+        sl = slice(offset, offset + len(states))
+        check, may_block = monitored[0][sl], monitored[1][sl]
         qpos = states[:, 1 : 1 + m.nq]
         slid = self._slid(states, self.cabinet_xy0)
         fingers = 0.5 * (qpos[:, self._fingers[0]] + qpos[:, self._fingers[1]])
         tcp = qpos[:, self._slide_adr] + TCP_OFFSET * x_axes(
             qpos[:, self._ball_adr : self._ball_adr + 4]
         )
-        lag = np.linalg.norm(tcp - prog.pos, axis=1)
-        every = self._check_every()
-        check = np.zeros(len(lag), dtype=bool)
-        check[every - 1 :: every] = True
-        check[prog.phase_ends] = True
-        check[-1] = True
-        lost = check & grasp_lost(prog.held, fingers)
+        lag = np.linalg.norm(tcp - prog.pos[sl], axis=1)
+        lost = check & grasp_lost(prog.held[sl], fingers)
         moved = check & cabinet_slid(slid, self.params)
-        blocked = check & held_back(lag, prog.tol)
-        blocked &= ~prog.holds | np.r_[prog.holds[1:] != prog.holds[:-1], False]
+        blocked = check & may_block & held_back(lag, prog.tol[sl])
         stops = np.flatnonzero(lost | moved | blocked)
         if not len(stops):
-            return len(lag) - 1, Status.OK, "", ""
-        k = int(stops[0])
-        name = str(prog.names[k])
-        if lost[k]:
+            return None
+        i = int(stops[0])
+        k, name = offset + i, str(prog.names[offset + i])
+        if lost[i]:
             return k, Status.GRASP_LOST, stop_detail(Status.GRASP_LOST, name), name
-        if moved[k]:
-            return k, Status.CABINET_MOVED, stop_detail(Status.CABINET_MOVED, name, slid[k]), name
-        return k, Status.COLLISION, stop_detail(Status.COLLISION, name, lag[k]), name
+        if moved[i]:
+            return k, Status.CABINET_MOVED, stop_detail(Status.CABINET_MOVED, name, slid[i]), name
+        return k, Status.COLLISION, stop_detail(Status.COLLISION, name, lag[i]), name
 
     def after(
         self, prog: Program, ctrl: np.ndarray, states: np.ndarray, judged: tuple
