@@ -108,6 +108,7 @@ stream ``np.random.default_rng([seed, 1])`` (:func:`draw_look`):
 - hardware (:data:`HARDWARE`): steel, brass, bronze, black or chrome; door bars up to
   40 cm (0.4); square bars (0.3); round finials (0.3); mushroom knobs (0.5); a dark
   finger-grip slot on handle-less fronts (0.5);
+- doors hinged at the side (0.9; flaps 0.1, against 0.3 in the plain style);
 - pull placement: drawer pulls centred or raised toward the top edge (0.4: 35-75% of
   the front's half-height above its centre; 41083's sit at 71%); side doors' pulls a
   vertical bar by the free edge, centred or raised (0.5: up to 60%; 40147's at 51%), or
@@ -614,6 +615,10 @@ LONG_BAR_PROB = 0.4
 #: A short top row (drawers over doors, as kitchen bases and 41083/40147 have) [m].
 DRAWER_ROW = (0.12, 0.20)
 DRAWER_ROW_PROB = 0.5
+#: Door hinge sides in the furniture style (one draw, as the plain style's): real
+#: storage furniture hinges its doors at the side (both SAPIEN objects: three side
+#: doors, no flap), and a flap's pull by its edge looks like a raised drawer pull.
+FURNITURE_HINGES: dict[str, float] = {"left": 0.45, "right": 0.45, "top": 0.05, "bottom": 0.05}
 #: Drawer pulls raised toward the top edge: probability, and the offset of the pull's
 #: centre above the front's centre in half-heights (41083's drawers: 0.71).
 DRAWER_PULL_RAISED = (0.4, (0.35, 0.75))
@@ -1117,7 +1122,7 @@ def generate_cabinet(
         )
         draft = _draft_part(
             rng, cell_kinds[idx], (y0, y1), (z0, z1), xf, xb, gap, tf, handle_style,
-            handle_params, colors,
+            handle_params, colors, HINGE_WEIGHTS if look is None else FURNITURE_HINGES,
         )  # fmt: skip
         if look is not None:
             draft = look.place_pull(draft, handle_style, handle_params, gap, colors["handle"])
@@ -1185,8 +1190,10 @@ def _draft_part(
     style: str,
     hp: dict[str, float],
     colors: dict[str, tuple[float, float, float, float]],
+    hinges: dict[str, float] = HINGE_WEIGHTS,
 ) -> dict:
-    """Geometry (link frame), joint and grasp point of one cell's part."""
+    """Geometry (link frame), joint and grasp point of one cell's part (``hinges``: a
+    door's hinge-side weights)."""
     (y0, y1), (z0, z1) = ys, zs
     w, h, d = y1 - y0, z1 - z0, xf - xb
     yc, zc = 0.5 * (y0 + y1), 0.5 * (z0 + z1)
@@ -1240,7 +1247,7 @@ def _draft_part(
         )
         return out
     if kind == "door":
-        hinge = _choice(rng, HINGE_WEIGHTS, tuple(HINGE_WEIGHTS))
+        hinge = _choice(rng, hinges, tuple(hinges))
         # e: unit vector from the hinge line to the free edge; origin: hinge point.
         e, origin = {
             "left": (np.array([0.0, 1.0, 0.0]), np.array([xf, y0 + gap, zc])),
