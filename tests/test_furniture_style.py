@@ -181,3 +181,24 @@ def test_furniture_pulls_sit_where_real_furniture_puts_them() -> None:
             if bars and g.shape == "cylinder":
                 np.testing.assert_allclose(np.asarray(g.pos)[1:] + p.origin[1:], p.handle_pos[1:])
     assert raised >= 5 and top_doors >= 3, (raised, top_doors)
+
+
+def test_raised_drawer_pulls_only_on_fronts_that_read_as_furniture() -> None:
+    """A raised drawer pull on a flat-coloured slab is what a plain flap's pull looks
+    like; over 80 cabinets every raised drawer pull sits on a framed or figured-grain
+    front, and looks that raise pulls keep them centred on their plain-looking fronts."""
+    raised = kept_centred = 0
+    for seed in range(80):
+        spec = generate_cabinet(seed, style="furniture")
+        look = gen.draw_look(np.random.default_rng([seed, 1]))
+        for p in spec.movable_parts:
+            if p.kind != "drawer" or p.handle == "none":
+                continue
+            _, v = _pull_offset(p)
+            furniture = look.reads_as_furniture(*(float(x) for x in p.cell_size))
+            if v > 0.3:
+                raised += 1
+                assert furniture, (seed, p.link, look.drawer_design, look.finishes["front"])
+            elif look.drawer_pull_v > 0.0 and not furniture:
+                kept_centred += 1
+    assert raised >= 5 and kept_centred >= 3, (raised, kept_centred)

@@ -109,8 +109,10 @@ stream ``np.random.default_rng([seed, 1])`` (:func:`draw_look`):
   40 cm (0.4); square bars (0.3); round finials (0.3); mushroom knobs (0.5); a dark
   finger-grip slot on handle-less fronts (0.5);
 - doors hinged at the side (0.9; flaps 0.1, against 0.3 in the plain style);
-- pull placement: drawer pulls centred or raised toward the top edge (0.4: 35-75% of
-  the front's half-height above its centre; 41083's sit at 71%); side doors' pulls a
+- pull placement: drawer pulls centred or raised toward the top edge (0.5: 35-75% of
+  the front's half-height above its centre; 41083's sit at 71%), raised only on fronts
+  that read as furniture (framed, or a figured grain: a raised pull on a flat slab is
+  the plain style's flap); side doors' pulls a
   vertical bar by the free edge, centred or raised (0.5: up to 60%; 40147's at 51%), or
   a horizontal bar centred across by the top edge (0.25: 70-90%; 41083's at 89%);
 - layout (:data:`MERGES`): one column's lower rows as one tall cell (a door beside a
@@ -619,9 +621,12 @@ DRAWER_ROW_PROB = 0.5
 #: storage furniture hinges its doors at the side (both SAPIEN objects: three side
 #: doors, no flap), and a flap's pull by its edge looks like a raised drawer pull.
 FURNITURE_HINGES: dict[str, float] = {"left": 0.45, "right": 0.45, "top": 0.05, "bottom": 0.05}
+#: Grain images from this index on are figured woods; lower ones the faint grain of
+#: paints and stone (:func:`draw_look`).
+FIGURED_GRAIN = 3
 #: Drawer pulls raised toward the top edge: probability, and the offset of the pull's
 #: centre above the front's centre in half-heights (41083's drawers: 0.71).
-DRAWER_PULL_RAISED = (0.4, (0.35, 0.75))
+DRAWER_PULL_RAISED = (0.5, (0.35, 0.75))
 #: Side doors' pulls: ``edge`` (vertical by the free edge, as the plain style) or
 #: ``top`` (horizontal, centred across, by the top edge: 41083's doors).
 DOOR_PULLS: dict[str, float] = {"edge": 0.75, "top": 0.25}
@@ -727,6 +732,14 @@ class FurnitureLook:
             for g in geoms
         ]
 
+    def reads_as_furniture(self, fw: float, fh: float) -> bool:
+        """A ``fw`` x ``fh`` [m] drawer front in this look shows what no plain-style
+        front has: a frame (shaker, raised or moulded, on fronts of
+        :data:`MIN_FRAMED` and more) or a figured wood grain."""
+        framed = self.drawer_design != "slab" and min(fw, fh) >= MIN_FRAMED
+        finish = self.finishes["front"]
+        return framed or (finish.startswith("grain_") and int(finish[6:]) >= FIGURED_GRAIN)
+
     def place_pull(
         self, draft: dict, style: str, hp: dict[str, float], gap: float, metal: tuple
     ) -> dict:
@@ -741,6 +754,11 @@ class FurnitureLook:
         front = draft["cell_center"] - draft["origin"]  # front centre, link frame
         face = np.array([front[0], *(draft["handle_pos"] - draft["origin"])[1:]])
         bar_dir, v = ("y", self.drawer_pull_v) if kind == "drawer" else ("z", self.door_pull_v)
+        if kind == "drawer" and not self.reads_as_furniture(fw, fh):
+            # A raised pull on a flat-coloured slab is, pixel for pixel, the plain
+            # style's flap pull by its edge: keep the two conventions told apart by
+            # the look (the first retraining typed plain flaps drawers).
+            v = 0.0
         if kind == "door" and self.door_pull == "top":
             bar_dir, face[1] = "y", front[1]
         along = fw if bar_dir == "y" else fh
@@ -878,7 +896,7 @@ def draw_look(rng: np.random.Generator) -> FurnitureLook:
 
     def finish(rgba: tuple) -> str:
         if rgba in FURNITURE_WOODS:  # figured grain
-            return f"grain_{int(rng.integers(3, GRAIN_COUNT))}"
+            return f"grain_{int(rng.integers(FIGURED_GRAIN, GRAIN_COUNT))}"
         return "" if rng.random() < 0.5 else f"grain_{int(rng.integers(0, 2))}"  # paint, stone
 
     finishes = {"body": finish(body), "front": finish(front), "top": finish(top_rgba)}
