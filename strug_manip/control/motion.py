@@ -348,8 +348,10 @@ class ArmMotionPlanner:
                     planner.setRange(self.planner_range)
                 ss.setPlanner(planner)
                 budget.start()
-                status = ss.solve(ob.PlannerTerminationCondition(budget.spent))
-                budget.stop()
+                try:
+                    status = ss.solve(ob.PlannerTerminationCondition(budget.spent))
+                finally:
+                    budget.stop()  # the simplifier's checks are not the search's
                 if not ss.haveExactSolutionPath():
                     cap = f"; {WALL_CAP_HIT}" if budget.capped else ""
                     return failed(NO_PLAN, f"OMPL status: {status.asString()}{cap}")

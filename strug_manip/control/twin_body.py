@@ -356,7 +356,7 @@ class PlanningTwin(TwinPrograms, TwinRollout):
         whole_body = any(bp is not None for bp in placement.base_paths)
         # The arm's servos depend on the placement alone: every twin that runs it
         # (the particles of a search node) shares them.
-        axes, kp, force, torque = self.ctx.derived(
+        axes, kp, force, torque = self._shared(  # type: ignore[misc]
             placement, "servo", lambda: arm_servo(self.ctx, base, q, whole_body)
         )
         self._axes = axes

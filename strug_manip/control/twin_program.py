@@ -272,10 +272,11 @@ class TwinPrograms:
     def _shared(self, placement: Placement, key: Hashable, compute: Callable[[], object]) -> object:
         """What ``compute()`` gave for ``placement`` and ``key`` on any twin with this
         twin's context, time step and skill constants, else its result
-        (:meth:`~.context.ControlContext.derived`): for what depends on the placement and
-        the full robot alone, not on the twin's cabinet (the arm's poses along its
-        joint path, the base's response), so the particles of a search node derive it
-        once rather than once each."""
+        (:meth:`~.context.ControlContext.derived`): for what depends on the placement,
+        the full robot and what ``key`` names alone, not on the twin's cabinet (the
+        arm's servos, its poses along its joint path, the base's response; the stow
+        planned in the planning world that ``key``'s token names), so the particles of
+        a search node derive it once rather than once each."""
         dt = self.world.model.opt.timestep
         return self.ctx.derived(placement, ("twin", key, dt, self.params), compute)
 
@@ -354,7 +355,7 @@ class TwinPrograms:
 
         # The plan depends on the planning world alone: every twin that runs this
         # placement there shares it (the particles of one hypothesis, mostly).
-        found = self.ctx.derived(placement, ("stow", self._token(pw), self.params), plan)
+        found = self._shared(placement, ("stow plan", self._token(pw)), plan)
         if found is None:
             return None
         stow, goal = found
