@@ -113,3 +113,12 @@ def x_axes(q: np.ndarray) -> np.ndarray:
     """The x axes (n, 3) of the rotations of unit quaternions ``q`` (n, 4)."""
     w, x, y, z = q.T
     return np.column_stack([1 - 2 * (y * y + z * z), 2 * (x * y + z * w), 2 * (x * z - y * w)])
+
+
+def rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """``v`` (3,) rotated by unit quaternions ``q`` (w, x, y, z), (n, 4) -> (n, 3)
+    (or (4,) -> (3,))."""
+    q = np.asarray(q, dtype=float)
+    w, u = q[..., :1], q[..., 1:]
+    t = 2.0 * np.cross(u, v)
+    return v + w * t + np.cross(u, t)

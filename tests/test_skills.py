@@ -726,7 +726,7 @@ def test_a_runs_head_rolled_out_in_spans_is_one_rollout_cut_at_its_stop(worlds, 
         twin = PlanningTwin(spec, world.config, ctx)
         twin.reset()
         m, d = twin.world.model, twin.world.data
-        twin.cabinet_xy0 = d.qpos[twin._cabinet_xy : twin._cabinet_xy + 2].copy()
+        twin.mark_cabinet()
         prog = twin.program(skill.plan(twin.world))
         twin._start(prog)
         start = np.empty(mujoco.mj_stateSize(m, twin_mod.ROLLOUT_STATE))

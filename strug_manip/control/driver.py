@@ -150,15 +150,19 @@ class JointDriver:
         vels[-1] = 0.0  # the motion ends at rest
         every = max(1, round(MONITOR_PERIOD / dt))
         n = len(self.arm_cmd)
-        for k in range(len(cmds)):
-            self.arm_cmd, self.arm_vel = cmds[k, :n], vels[k, :n]
-            if base_path is not None:
-                self.base_target, self.base_vel = cmds[k, n:], vels[k, n:]
-            self._step()
-            if monitor is not None and k % every == every - 1:
-                monitor((k + 1) * dt)
-        self.arm_vel = np.zeros(n)
-        self.base_vel = np.zeros(3)
+        try:
+            for k in range(len(cmds)):
+                self.arm_cmd, self.arm_vel = cmds[k, :n], vels[k, :n]
+                if base_path is not None:
+                    self.base_target, self.base_vel = cmds[k, n:], vels[k, n:]
+                self._step()
+                if monitor is not None and k % every == every - 1:
+                    monitor((k + 1) * dt)
+        finally:  # a monitor's stop too: the servos stop feeding the path's velocity
+            # forward (a hand stopped at a door's hinge stop kept pulling at it through
+            # the grip's release and twisted the cabinet 10 degrees)
+            self.arm_vel = np.zeros(n)
+            self.base_vel = np.zeros(3)
         return T
 
     def move(self, q_goal: np.ndarray, seconds: float, monitor: Monitor | None = None) -> float:

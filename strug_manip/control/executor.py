@@ -6,7 +6,8 @@ physics) and the Fetch's floating hand (:class:`~strug_manip.control.twin_body.
 PlanningTwin`, the search's fast twin). Both implement :class:`Body` and differ only in
 how they move; what decides how a run goes and what it reports is here, once:
 
-- **the stop rules** (:func:`grasp_lost`, :func:`cabinet_slid`, :func:`held_back`, their
+- **the stop rules** (:func:`grasp_lost`, :func:`cabinet_slid`, :func:`held_back`, and
+  for an opening :func:`at_part_end`, which ends it ``ok`` where its part stops; their
   reasons :func:`stop_detail`), checked while a motion runs (the full robot every
   control tick, the twin on its rollout's states, vectorised), and what counts as
   holding the object (:func:`holds`, :func:`keeps_object`);
@@ -38,6 +39,7 @@ from strug_manip.control.outcome import Outcome, SkillStop, Status
 from strug_manip.control.params import SkillParams
 from strug_manip.control.placement import Placement
 from strug_manip.control.plan import Grip, Line, SkillPlan, retreat_poses
+from strug_manip.geometry import rotate
 from strug_manip.robot.fetch import (
     ARM_TORSO_JOINTS,
     CARRY,
@@ -102,9 +104,72 @@ def held_back(lag: Values, tol: Values) -> Flags:
     return lag > tol
 
 
+#: The lines of an opening along which its part moves with the hand: ``move``, then
+#: its last few centimetres, the slow ``ease``.
+OPENING_LINES = ("move", "ease")
+
+
+def opening_span(plan: SkillPlan) -> np.ndarray | None:
+    """Where the TCP starts (the grasp) and ends ``plan``'s opening lines
+    (:data:`OPENING_LINES`), (2, 3) [m]; None for a plan without them."""
+    prev, start, end = plan.pre, None, None
+    for ph in plan.phases:
+        if not isinstance(ph, Line):
+            continue
+        if ph.name in OPENING_LINES:
+            start = prev[:3, 3] if start is None else start
+            end = ph.poses[-1][:3, 3]
+        prev = ph.poses[-1]
+    return None if start is None or end is None else np.stack([start, end])
+
+
+def opening_share(tcp: np.ndarray, span: np.ndarray) -> Values:
+    """How far the commanded TCP ``tcp`` ((3,) or (n, 3)) [m] is along an opening
+    ``span`` (:func:`opening_span`): its straight-line distance from the grasp over
+    that of the path's end [-] (monotonic along a swing of up to 180 degrees)."""
+    full = float(np.linalg.norm(span[1] - span[0]))
+    return np.linalg.norm(np.asarray(tcp) - span[0], axis=-1) / max(full, 1e-9)
+
+
+def grasp_anchor(T_world_cabinet: np.ndarray, span: np.ndarray) -> np.ndarray:
+    """The cabinet's point at an opening's grasp (``span[0]``, :func:`opening_span`)
+    in the cabinet base's frame ``T_world_cabinet`` (4, 4) when the skill started, and
+    in the world: (2, 3) [m] (:func:`cabinet_give`)."""
+    local = T_world_cabinet[:3, :3].T @ (span[0] - T_world_cabinet[:3, 3])
+    return np.stack([local, span[0]])
+
+
+def cabinet_give(pos: np.ndarray, quat: np.ndarray, anchor: np.ndarray) -> Values:
+    """How far the cabinet has given where an opening pulls it [m]: the distance the
+    point of it that was at the grasp (``anchor``, :func:`grasp_anchor`) has moved,
+    the cabinet base at ``pos`` ((3,) or (n, 3)) turned by ``quat`` ((4,) or (n, 4),
+    w x y z). A cabinet that tips toward the hand gives there before its base slides
+    (a drawer 1.06 m high pulled into its stop)."""
+    return np.linalg.norm(np.asarray(pos) + rotate(quat, anchor[0]) - anchor[1], axis=-1)
+
+
+def strained(give: Values, lag: Values, params: SkillParams) -> Flags:
+    """An opening's part no longer follows the hand: the cabinet has given ``give`` >
+    ``end_give`` where the hand pulls (:func:`cabinet_give`) or the hand lags ``lag``
+    > ``end_lag`` [m] behind its command."""
+    return (give > params.end_give) | (lag > params.end_lag)
+
+
+def at_part_end(share: Values, strain: Flags, strained_before: Flags, params: SkillParams) -> Flags:
+    """Stop rule of an opening's lines, ``ok``: its part has met its end. The opening's
+    first strain (``strain``, :func:`strained`; ``strained_before``: there was one at
+    an earlier check) comes with the hand ``share`` >= ``end_share`` of the way. A part
+    that strains earlier does not move as the plan believes (a drawer swung as a door,
+    a door pulled straight): the other rules stop it."""
+    return strain & ~strained_before & (share >= params.end_share)
+
+
 def stop_detail(status: Status, name: str, amount: float = 0.0) -> str:
     """Why a stop rule stopped the motion ``name``: ``amount`` is how far the cabinet
-    slid or the gripper lags [m]."""
+    slid or the gripper lags [m], or for ``ok`` (:func:`at_part_end`) the share of the
+    opening done [-]."""
+    if status is Status.OK:
+        return f"the part met its end {amount:.0%} of the way ({name})"
     if status is Status.GRASP_LOST:
         return f"the fingers closed on nothing ({name})"
     if status is Status.CABINET_MOVED:

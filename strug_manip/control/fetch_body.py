@@ -47,22 +47,29 @@ from planners.errors import ConfigError
 from strug_manip.control.context import ControlContext
 from strug_manip.control.driver import MONITOR_PERIOD, JointDriver
 from strug_manip.control.executor import (
+    OPENING_LINES,
     STOW_SEED,
+    at_part_end,
+    cabinet_give,
     cabinet_slid,
     clear_first,
     drive_posture,
     facts_before,
+    grasp_anchor,
     grasp_lost,
     held_back,
     holds,
     keeping_clear,
     keeps_object,
     near_posture,
+    opening_share,
+    opening_span,
     plan_stow,
     recovery_poses,
     report,
     settle,
     stop_detail,
+    strained,
 )
 from strug_manip.control.motion import (
     ArmMotionPlanner,
@@ -75,6 +82,7 @@ from strug_manip.control.outcome import Outcome, SkillStop, Status
 from strug_manip.control.params import DEFAULT_PARAMS, SkillParams
 from strug_manip.control.placement import Placement, find_placement
 from strug_manip.control.plan import Grip, Line, SkillPlan
+from strug_manip.geometry import quat_of
 from strug_manip.robot.fetch import (
     ARM_TORSO_JOINTS,
     BASE_JOINTS,
@@ -156,6 +164,8 @@ class FullRobot:
         self.n_plans = 0
         before = facts_before(self.world)
         self._cab0 = before[1]
+        self._cabinet0 = self.world.cabinet_pose()
+        self._strained = False  # the opening's part has stopped following the hand
         phase = "plan"
         try:
             self._plan = plan
@@ -425,34 +435,61 @@ class FullRobot:
         seconds = max(0.3, line.length / line.speed)
         base_path = placement.base_paths[k]
         mon = self._line_monitor(line)
-        self.drv.follow(list(placement.lines[k]), seconds, base_path=base_path, monitor=mon)
-        self.drv.hold(self.params.settle_time)
-        mon(0.0)
         moved = line.part_joint is not None and line.part_q is not None
-        if moved and self.plan_world is not self.world:
-            # The believed part is where the line took it (the next skill plans with it
-            # there, as the robot believes it).
-            self.plan_world.set_parts({line.part_joint: float(line.part_q[-1])})
+        try:
+            self.drv.follow(list(placement.lines[k]), seconds, base_path=base_path, monitor=mon)
+            self.drv.hold(self.params.settle_time)
+            mon(0.0)
+        except SkillStop as stop:
+            if moved and stop.status is Status.OK:  # the part met its end: it is where
+                # the hand let it (the recovery's stow plans around it there)
+                tcp = self.world.site_pose(GRIPPER_SITE)[:3, 3]
+                i = int(np.argmin(np.linalg.norm(line.poses[:, :3, 3] - tcp, axis=1)))
+                self._believe_part(line, i)
+            raise
+        if moved:
+            self._believe_part(line, len(line.poses) - 1)
+
+    def _believe_part(self, line: Line, i: int) -> None:
+        """The believed part is where pose ``i`` of ``line`` takes it (the next skill and
+        a recovery's stow plan with it there, as the robot believes it)."""
+        if self.plan_world is not self.world and line.part_joint is not None:
+            assert line.part_q is not None
+            self.plan_world.set_parts({line.part_joint: float(line.part_q[i])})
 
     def _line_monitor(self, line: Line | None) -> Callable[[float], None]:
         """Stops a motion when the grasp of ``line`` is lost (if it holds something),
-        the cabinet has slid more than ``cabinet_motion_limit`` since the skill started,
-        or the gripper lags more than the tracking tolerance behind its command (None:
-        a free motion)."""
-        m, d = self.world.model, self.world.data
+        an opening's part has met its end (:func:`~.executor.at_part_end`: stopped
+        ``ok``), the cabinet has slid more than ``cabinet_motion_limit`` since the skill
+        started, or the gripper lags more than the tracking tolerance behind its
+        command (None: a free motion)."""
+        m, d, p = self.world.model, self.world.data, self.params
         tendon = m.tendon("gripper").id
         site = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, GRIPPER_SITE)
-        tol = self.params.free_tolerance if line is None else self.params.tracking_tolerance
+        tol = p.free_tolerance if line is None else p.tracking_tolerance
         if line is not None and line.tolerance is not None:
             tol = line.tolerance
         name = "free motion" if line is None else line.name
+        span = opening_span(self._plan) if line is not None and name in OPENING_LINES else None
+        anchor = None if span is None else grasp_anchor(self._cabinet0, span)
 
         def monitor(_: float) -> None:
             if line is not None and grasp_lost(line.holding, float(d.ten_length[tendon])):
                 raise SkillStop(Status.GRASP_LOST, stop_detail(Status.GRASP_LOST, name))
-            self._check_slide(self._cab0, name)
-            cmd = self.ctx.ik.forward(self._command())
-            lag = float(np.linalg.norm(cmd[:3, 3] - d.site_xpos[site]))
+            slid = float(np.linalg.norm(self.world.cabinet_displacement_vector() - self._cab0))
+            cmd = self.ctx.ik.forward(self._command())[:3, 3]
+            lag = float(np.linalg.norm(cmd - d.site_xpos[site]))
+            if span is not None and anchor is not None:
+                share = float(opening_share(cmd, span))
+                T = self.world.cabinet_pose()
+                give = float(cabinet_give(T[:3, 3], quat_of(T[:3, :3]), anchor))
+                strain = bool(strained(give, lag, p))
+                end = at_part_end(share, strain, self._strained, p)
+                self._strained |= strain
+                if end:
+                    raise SkillStop(Status.OK, stop_detail(Status.OK, name, share), name)
+            if cabinet_slid(slid, p):
+                raise SkillStop(Status.CABINET_MOVED, stop_detail(Status.CABINET_MOVED, name, slid))
             if held_back(lag, tol):
                 raise SkillStop(Status.COLLISION, stop_detail(Status.COLLISION, name, lag))
 

@@ -77,9 +77,9 @@ from strug_manip.control.params import DEFAULT_PARAMS, SkillParams
 from strug_manip.control.placement import Placement, find_placement, work_frame
 from strug_manip.control.plan import SkillPlan
 from strug_manip.control.twin_program import BASE_SPEED, PROGRAMS, Program, TwinPrograms
-from strug_manip.control.twin_rollout import ROLLOUT_STATE, TCP_OFFSET, TwinRollout
+from strug_manip.control.twin_rollout import ROLLOUT_STATE, TCP_OFFSET, TwinRollout, stopped
 from strug_manip.control.twin_servo import arm_servo
-from strug_manip.geometry import quat_of
+from strug_manip.geometry import mat_of, quat_of
 from strug_manip.objects.generator import CabinetSpec
 from strug_manip.robot.fetch import (
     BASE_JOINTS,
@@ -200,6 +200,9 @@ class PlanningTwin(TwinPrograms, TwinRollout):
         self._cabinet_xy = int(m.jnt_qposadr[free])  # its body's x, y in qpos
         #: Where the cabinet stood (x, y) [m] when the current skill started.
         self.cabinet_xy0 = np.zeros(2)
+        self.cabinet0 = np.eye(4)
+        #: An opening's part stopped following the hand at an earlier check of the run.
+        self._strained = False
         self.reset()
 
     # -- state -------------------------------------------------------------------------
@@ -242,6 +245,16 @@ class PlanningTwin(TwinPrograms, TwinRollout):
         see; default: this twin's own cabinet); never raises for a failure of the
         skill."""
         return run_batch([self], plan, plan_world)[0]
+
+    def mark_cabinet(self) -> None:
+        """Take where the cabinet base stands now as where the skill started: the stop
+        rules measure its slide (``cabinet_xy0``, (2,) [m]) and its give at the grasp
+        (``cabinet0``, (4, 4)) from there."""
+        q, c = self.world.data.qpos, self._cabinet_xy
+        self.cabinet_xy0 = q[c : c + 2].copy()
+        self.cabinet0 = np.eye(4)
+        self.cabinet0[:3, :3] = mat_of(q[c + 3 : c + 7])
+        self.cabinet0[:3, 3] = q[c : c + 3]
 
     def _placement(self, plan: SkillPlan, plan_world: ManipulationWorld | None) -> Placement:
         base = self.robot_base
@@ -391,7 +404,7 @@ class PlanningTwin(TwinPrograms, TwinRollout):
         w.data.mocap_pos[self._arm_mocap] = ARM_PARK  # the arm is not simulated between runs
         w.data.mocap_quat[self._arm_mocap] = (1.0, 0.0, 0.0, 0.0)
         mujoco.mj_forward(m, w.data)
-        if status is Status.OK:
+        if not stopped(judged):
             self.grip_cmd = float(prog.grip[-1])
             self.set_robot_base(prog.placement.start_of(len(prog.placement.lines))[0])
         else:  # recovered where it stopped, the base where the skill placed it
@@ -484,7 +497,7 @@ def run_batch(
         w = tw.world
         tw.t0 = float(w.data.time)
         tw._before = facts_before(w)
-        tw.cabinet_xy0 = w.data.qpos[tw._cabinet_xy : tw._cabinet_xy + 2].copy()
+        tw.mark_cabinet()
         tw._t_wall = t_wall
         try:
             prog = tw.program(plan, plan_world)

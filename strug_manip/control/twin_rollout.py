@@ -13,13 +13,20 @@ from mujoco import rollout
 import strug_manip.control.timing as timing
 from strug_manip.control.driver import MONITOR_PERIOD
 from strug_manip.control.executor import (
+    OPENING_LINES,
     REST_SPEED,
+    at_part_end,
+    cabinet_give,
     cabinet_slid,
+    grasp_anchor,
     grasp_lost,
     held_back,
     keeps_object,
+    opening_share,
+    opening_span,
     recovery_poses,
     stop_detail,
+    strained,
 )
 from strug_manip.control.outcome import Status
 from strug_manip.control.twin_program import COAST_TIME, Program
@@ -56,8 +63,15 @@ CONTROL = int(
 #: seed 9100) one run in six stops early, mostly at the grasp, and the steps after
 #: its stop were 12 % of all head steps.
 HEAD_SPAN = 50
-#: A run's verdict: the step it ends at, its status, why (one line) and the phase.
+#: A run's verdict: the step it ends at, its status, why (one line) and the phase
+#: (empty for a run that went to its end; see :func:`stopped`).
 Judged = tuple[int, Status, str, str]
+
+
+def stopped(judged: Judged) -> bool:
+    """The run stopped before its end, at a stop rule (an opening's part at its end
+    too, status ``ok`` with the phase it stopped in): the recovery follows."""
+    return judged[1] is not Status.OK or bool(judged[3])
 
 
 class TwinRollout:
@@ -154,6 +168,7 @@ class TwinRollout:
         mujoco.mj_getState(m, d, start, ROLLOUT_STATE)
         parts: list[np.ndarray] = []
         warm = None  # a rollout's first step starts cold
+        self._strained = False  # no opening has strained yet (carried span to span)
         for c in range(0, prog.free, HEAD_SPAN):
             span = ctrl[None, c : min(c + HEAD_SPAN, prog.free)]
             st, _ = rollout.rollout(m, d, start[None], span,
@@ -173,6 +188,7 @@ class TwinRollout:
         checked every 10 ms as on the full robot) and why; the last step if none.
         ``states``: the rollout's state after each of the program's steps, (nstep,
         nstate)."""
+        self._strained = False
         stop = self._first_stop(prog, self._monitored(prog), states, 0)
         return (len(states) - 1, Status.OK, "", "") if stop is None else stop
 
@@ -213,13 +229,31 @@ class TwinRollout:
         lost = check & grasp_lost(prog.held[sl], fingers)
         moved = check & cabinet_slid(slid, self.params)
         blocked = check & may_block & held_back(lag, prog.tol[sl])
-        stops = np.flatnonzero(lost | moved | blocked)
+        span = opening_span(prog.plan)
+        share = np.zeros(len(states))
+        ended = np.zeros(len(states), dtype=bool)
+        if span is not None:
+            share = opening_share(prog.pos[sl], span)
+            c = self._cabinet_xy
+            give = cabinet_give(qpos[:, c : c + 3], qpos[:, c + 3 : c + 7],
+                                grasp_anchor(self.cabinet0, span))  # fmt: skip
+            strain = (
+                check & np.isin(prog.names[sl], OPENING_LINES) & strained(give, lag, self.params)
+            )
+            so_far = np.logical_or.accumulate(strain) | self._strained
+            before = np.r_[self._strained, so_far[:-1]]
+            ended = at_part_end(share, strain, before, self.params)
+        stops = np.flatnonzero(lost | ended | moved | blocked)
+        if span is not None:  # what the next span's checks follow
+            self._strained = bool(so_far[stops[0]] if len(stops) else so_far[-1])
         if not len(stops):
             return None
         i = int(stops[0])
         k, name = offset + i, str(prog.names[offset + i])
         if lost[i]:
             return k, Status.GRASP_LOST, stop_detail(Status.GRASP_LOST, name), name
+        if ended[i]:
+            return k, Status.OK, stop_detail(Status.OK, name, float(share[i])), name
         if moved[i]:
             return k, Status.CABINET_MOVED, stop_detail(Status.CABINET_MOVED, name, slid[i]), name
         return k, Status.COLLISION, stop_detail(Status.COLLISION, name, lag[i]), name
@@ -236,11 +270,11 @@ class TwinRollout:
         that of the head's last state when the head ran through."""
         m = self.world.model
         dt = m.opt.timestep
-        k, status = judged[0], judged[1]
+        k = judged[0]
         start, parts, final = states[k], [], judged
         stop_prog, stop_k, last = prog, k, ctrl[k : k + 1]
         try:
-            if status is Status.OK and prog.free < len(prog.pos):
+            if not stopped(judged) and prog.free < len(prog.pos):
                 m.opt.timestep = dt * FREE_COARSENING
                 sl = slice(prog.free, None, FREE_COARSENING)
                 stop_prog, tail_ctrl = prog.steps(sl), ctrl[sl]
@@ -252,9 +286,9 @@ class TwinRollout:
                 stop_k, start, last = j[0], st[0][j[0]], tail_ctrl[j[0] : j[0] + 1]
                 parts.append(st[0][: j[0] + 1])
                 final = (k, *j[1:])
-            elif status is Status.OK and not prog.coast:
+            elif not stopped(judged) and not prog.coast:
                 return None, judged  # ends holding: nothing follows
-            if final[1] is not Status.OK:
+            if stopped(final):
                 self.grip_cmd_at_stop = float(stop_prog.grip[stop_k])
                 extra = self.recovery(stop_prog, start)
                 rec, _ = rollout.rollout(m, self.world.data, start[None], extra[None],
@@ -262,7 +296,7 @@ class TwinRollout:
                 rec = self._until_slid(rec[0], start)
                 parts.append(rec)
                 start, last = rec[-1], extra[len(rec) - 1 : len(rec)]
-            budget = prog.coast if final[1] is Status.OK else 0
+            budget = 0 if stopped(final) else prog.coast
             budget = round(budget * dt / m.opt.timestep)
             parts.append(self.coast(start, self.park_arm(last), budget))
         finally:
