@@ -21,7 +21,9 @@ MuJoCo physics stepping all along (:class:`~strug_manip.control.driver.JointDriv
    line), each grip closed or opened; while a line runs, a lost grasp (fingers closed
    on nothing) or the gripper more than ``tracking_tolerance`` behind its commanded
    pose (the arm is blocked) stops the run; the robot then *recovers*: lets go (unless
-   it carries the object), backs off and stows, so that the next skill can start;
+   it carries the object), backs off and stows, so that the next skill can start; an
+   opening whose part stops following the hand past half its path has met the part's
+   end: it recovers the same way and reports ``ok`` (:func:`~.executor.at_part_end`);
 5. **stow**: back to the tuck (holding the object: to its carry posture), so the next
    skill may drive and the head camera sees the cabinet past the arm; planned with the
    rest before anything moves (:func:`~.executor.plan_stow`: from where the last line ends, the

@@ -11,7 +11,9 @@ these facts (the manipulation domain), never for the skill.
 Statuses, in the order a run can meet them:
 
 - ``ok``: every phase ran to its end (a wrong model can still end ``ok``: the handle
-  followed the gripper because the whole cabinet did);
+  followed the gripper because the whole cabinet did), or an opening ended where its
+  part stopped following the hand past half its path (its end, a limit no view
+  shows; ``detail`` says where, ``phase`` is the line it stopped in);
 - ``ik_infeasible``: no base placement from which the key poses and the Cartesian lines
   of the skill are reachable without collision (or, for the planning twin, reachable);
 - ``no_motion_plan``: OMPL found no collision-free arm motion to the pre-grasp or back;

@@ -1,0 +1,135 @@
+"""Issue 37: an opening ends where its part stops (a limit no view shows), in both
+bodies, while a part that does not move as believed still stops the run.
+
+Cabinets: generator seeds 11 (drawers) and 25 (doors) as in ``tests/test_skills.py``,
+the opened part's real limit cut to 0.7 of the generator's, the skill planned against
+the generator's cabinet (its limit 1/0.7 too far out)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from strug_manip.control import (
+    ControlContext,
+    OpenDoor,
+    OpenDrawer,
+    PlanningTwin,
+    PullH,
+    SkillParams,
+    Status,
+    handle_grasps,
+)
+from strug_manip.control.executor import (
+    at_part_end,
+    cabinet_give,
+    grasp_anchor,
+    opening_share,
+    opening_span,
+    strained,
+)
+from strug_manip.geometry import quat_of
+from strug_manip.objects.hypotheses import BelievedJoint
+from strug_manip.world.scene import SceneConfig
+from strug_manip.world.sim import ManipulationWorld
+
+#: The real limit as a share of the believed one.
+SHORT = 0.7
+
+
+@pytest.fixture(scope="module")
+def ctx() -> ControlContext:
+    return ControlContext()
+
+
+def short_limit_case(seed: int, kinds: tuple[str, ...], link: str):
+    """The believed world (the generator's cabinet), the real world (``link``'s limit
+    cut to :data:`SHORT`), the real cabinet's twin, the opening skill and the joint."""
+    cfg = SceneConfig(cabinet_seed=seed, cabinet_kinds=kinds)
+    believed = ManipulationWorld(cfg)
+    spec, T = believed.scene.cabinet_spec, believed.scene.T_world_cabinet
+    part = spec.part(link)
+    short = dataclasses.replace(part, upper=part.upper * SHORT)
+    real_spec = dataclasses.replace(
+        spec, parts=tuple(short if p.link == link else p for p in spec.parts)
+    )
+    real = ManipulationWorld.from_cabinet_spec(real_spec, cfg)
+    joint = BelievedJoint.of_part(part, 0.0, T)
+    make = OpenDrawer if joint.type == "prismatic" else OpenDoor
+    skill = make(handle_grasps(part, 0.0, T)[0], joint)
+    return believed, real, real_spec, skill, believed.scene.cabinet_prefix + part.joint, short.upper
+
+
+@pytest.mark.parametrize(("seed", "kinds", "link"), [(11, ("drawer",), "link_2"),
+                                                     (25, ("door",), "link_2")])  # fmt: skip
+def test_an_opening_ends_where_its_part_stops_in_both_bodies(ctx, seed, kinds, link) -> None:
+    believed, real, real_spec, skill, joint, upper = short_limit_case(seed, kinds, link)
+    p = SkillParams()
+    out = skill.run(real, ctx=ctx, plan_world=believed)
+    where = out.summary()
+    assert out.status is Status.OK and "met its end" in out.detail, where
+    assert out.phase in ("move", "ease") and not out.holding, where
+    assert out.part_positions[joint] == pytest.approx(upper, abs=0.02 * max(upper, 1.0)), where
+    assert out.cabinet_motion < p.cabinet_motion_limit, where
+    # The twin of the real cabinet predicts the same.
+    twin = PlanningTwin(real_spec, real.config, ctx)
+    twin.reset()
+    believed.reset()
+    tw = skill.simulate(twin, plan_world=believed)
+    assert tw.status is Status.OK and "met its end" in tw.detail, tw.summary()
+    assert tw.part_positions[joint] == pytest.approx(upper, abs=0.02 * max(upper, 1.0))
+    assert tw.cabinet_motion < p.cabinet_motion_limit, tw.summary()
+    # Without the rule (the share is never reached) the same pull drags the cabinet.
+    real.reset()
+    believed.reset()
+    off = skill.run(real, ctx=ctx, params=dataclasses.replace(p, end_share=2.0),
+                    plan_world=believed)  # fmt: skip
+    assert off.status is Status.CABINET_MOVED, off.summary()
+
+
+def test_the_part_end_rule_is_the_openings_first_strain_past_its_share() -> None:
+    p = SkillParams()
+    share = np.array([0.2, 0.4, 0.6, 0.8, 0.9])
+    # A strain first at 0.8: the part's end there.
+    strain = np.array([False, False, False, True, True])
+    before = np.r_[False, np.logical_or.accumulate(strain)[:-1]]
+    assert at_part_end(share, strain, before, p).tolist() == [False, False, False, True, False]
+    # A strain already at 0.4 (a wrong joint): never the part's end.
+    strain = np.array([False, True, False, True, True])
+    before = np.r_[False, np.logical_or.accumulate(strain)[:-1]]
+    assert not at_part_end(share, strain, before, p).any()
+    # Scalars (the full robot) as arrays (the twin).
+    assert at_part_end(0.8, True, False, p) and not at_part_end(0.3, True, False, p)
+    assert strained(p.end_give + 1e-3, 0.0, p) and strained(0.0, p.end_lag + 1e-3, p)
+    assert not strained(p.end_give, p.end_lag, p)
+
+
+def test_the_cabinets_give_is_where_the_hand_pulls() -> None:
+    """A cabinet turned about its base gives at the grasp by the arc there, though its
+    base does not slide; the share of an opening is its chord's."""
+    T0 = np.eye(4)
+    span = np.array([[0.5, 0.0, 1.0], [0.9, 0.0, 1.0]])
+    anchor = grasp_anchor(T0, span)
+    assert cabinet_give(np.zeros(3), np.array([1.0, 0, 0, 0]), anchor) == pytest.approx(0.0)
+    tilt = 0.02  # [rad] about y, through the base's origin: the grasp 1.12 m away
+    R = np.array([[np.cos(tilt), 0, np.sin(tilt)], [0, 1, 0], [-np.sin(tilt), 0, np.cos(tilt)]])
+    give = cabinet_give(np.zeros(3), quat_of(R), anchor)
+    assert give == pytest.approx(np.linalg.norm(span[0]) * tilt, rel=0.01)
+    both = cabinet_give(np.zeros((2, 3)), np.stack([[1.0, 0, 0, 0], quat_of(R)]), anchor)
+    assert both == pytest.approx([0.0, give])
+    assert opening_share(np.array([[0.7, 0, 1.0], [0.9, 0, 1.0]]), span) == pytest.approx(
+        [0.5, 1.0]
+    )
+
+
+def test_an_opening_plan_has_a_span_and_a_probe_none(ctx) -> None:
+    believed, _, _, skill, _, _ = short_limit_case(11, ("drawer",), "link_2")
+    plan = skill.plan(believed)
+    span = opening_span(plan)
+    assert span is not None
+    lines = {ln.name: ln for ln in plan.lines}
+    assert np.allclose(span[0], lines["approach"].poses[-1][:3, 3])
+    assert np.allclose(span[1], lines["ease"].poses[-1][:3, 3])
+    assert opening_span(PullH(skill.g).plan(believed)) is None
