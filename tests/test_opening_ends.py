@@ -22,14 +22,7 @@ from strug_manip.control import (
     Status,
     handle_grasps,
 )
-from strug_manip.control.executor import (
-    at_part_end,
-    cabinet_give,
-    grasp_anchor,
-    opening_share,
-    opening_span,
-    strained,
-)
+from strug_manip.control.executor import OpeningPath, at_part_end, strained
 from strug_manip.geometry import quat_of
 from strug_manip.objects.hypotheses import BelievedJoint
 from strug_manip.world.scene import SceneConfig
@@ -89,47 +82,47 @@ def test_an_opening_ends_where_its_part_stops_in_both_bodies(ctx, seed, kinds, l
     assert off.status is Status.CABINET_MOVED, off.summary()
 
 
-def test_the_part_end_rule_is_the_openings_first_strain_past_its_share() -> None:
+def test_the_part_end_rule_is_a_strain_along_the_path_after_an_unstrained_first_part() -> None:
     p = SkillParams()
     share = np.array([0.2, 0.4, 0.6, 0.8, 0.9])
-    # A strain first at 0.8: the part's end there.
-    strain = np.array([False, False, False, True, True])
-    before = np.r_[False, np.logical_or.accumulate(strain)[:-1]]
-    assert at_part_end(share, strain, before, p).tolist() == [False, False, False, True, False]
+    along = np.array([False, False, False, True, True])
+    # No strain in the first half: the part's end where it strains along the path.
+    early = np.zeros(5, dtype=bool)
+    assert at_part_end(share, early, along, p).tolist() == [False, False, False, True, True]
     # A strain already at 0.4 (a wrong joint): never the part's end.
-    strain = np.array([False, True, False, True, True])
-    before = np.r_[False, np.logical_or.accumulate(strain)[:-1]]
-    assert not at_part_end(share, strain, before, p).any()
+    early = np.array([False, True, True, True, True])
+    assert not at_part_end(share, early, along, p).any()
     # Scalars (the full robot) as arrays (the twin).
-    assert at_part_end(0.8, True, False, p) and not at_part_end(0.3, True, False, p)
+    assert at_part_end(0.8, False, True, p) and not at_part_end(0.3, False, True, p)
     assert strained(p.end_give + 1e-3, 0.0, p) and strained(0.0, p.end_lag + 1e-3, p)
     assert not strained(p.end_give, p.end_lag, p)
 
 
 def test_the_cabinets_give_is_where_the_hand_pulls() -> None:
     """A cabinet turned about its base gives at the grasp by the arc there, though its
-    base does not slide; the share of an opening is its chord's."""
-    T0 = np.eye(4)
-    span = np.array([[0.5, 0.0, 1.0], [0.9, 0.0, 1.0]])
-    anchor = grasp_anchor(T0, span)
-    assert cabinet_give(np.zeros(3), np.array([1.0, 0, 0, 0]), anchor) == pytest.approx(0.0)
+    base does not slide; the share of an opening is its chord's; the tangent is the
+    path's where the command is."""
+    path = OpeningPath(np.array([[0.5, 0.0, 1.0], [0.7, 0.0, 1.0], [0.7, 0.2, 1.0]]),
+                       np.array([0.5, 0.0, 1.0]))  # fmt: skip
+    assert np.allclose(path.give(np.zeros(3), np.array([1.0, 0, 0, 0])), 0.0)
     tilt = 0.02  # [rad] about y, through the base's origin: the grasp 1.12 m away
     R = np.array([[np.cos(tilt), 0, np.sin(tilt)], [0, 1, 0], [-np.sin(tilt), 0, np.cos(tilt)]])
-    give = cabinet_give(np.zeros(3), quat_of(R), anchor)
-    assert give == pytest.approx(np.linalg.norm(span[0]) * tilt, rel=0.01)
-    both = cabinet_give(np.zeros((2, 3)), np.stack([[1.0, 0, 0, 0], quat_of(R)]), anchor)
-    assert both == pytest.approx([0.0, give])
-    assert opening_share(np.array([[0.7, 0, 1.0], [0.9, 0, 1.0]]), span) == pytest.approx(
-        [0.5, 1.0]
-    )
+    give = path.give(np.zeros(3), quat_of(R))
+    assert np.linalg.norm(give) == pytest.approx(np.linalg.norm(path.anchor) * tilt, rel=0.01)
+    both = path.give(np.zeros((2, 3)), np.stack([[1.0, 0, 0, 0], quat_of(R)]))
+    assert np.allclose(both, [np.zeros(3), give])
+    end = np.linalg.norm([0.2, 0.2])
+    assert path.share(np.array([[0.6, 0, 1.0], [0.7, 0.2, 1.0]])) == pytest.approx([0.1 / end, 1.0])
+    assert np.allclose(path.tangent(np.array([[0.6, 0, 1.0], [0.7, 0.15, 1.0]])),
+                       [[1.0, 0, 0], [0, 1.0, 0]])  # fmt: skip
 
 
-def test_an_opening_plan_has_a_span_and_a_probe_none(ctx) -> None:
+def test_an_opening_plan_has_a_path_and_a_probe_none(ctx) -> None:
     believed, _, _, skill, _, _ = short_limit_case(11, ("drawer",), "link_2")
     plan = skill.plan(believed)
-    span = opening_span(plan)
-    assert span is not None
+    path = OpeningPath.of(plan, believed.scene.T_world_cabinet)
+    assert path is not None
     lines = {ln.name: ln for ln in plan.lines}
-    assert np.allclose(span[0], lines["approach"].poses[-1][:3, 3])
-    assert np.allclose(span[1], lines["ease"].poses[-1][:3, 3])
-    assert opening_span(PullH(skill.g).plan(believed)) is None
+    assert np.allclose(path.points[0], lines["approach"].poses[-1][:3, 3])
+    assert np.allclose(path.points[-1], lines["ease"].poses[-1][:3, 3])
+    assert OpeningPath.of(PullH(skill.g).plan(believed), np.eye(4)) is None

@@ -27,6 +27,7 @@ from __future__ import annotations
 import contextlib
 import time
 from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
@@ -109,59 +110,80 @@ def held_back(lag: Values, tol: Values) -> Flags:
 OPENING_LINES = ("move", "ease")
 
 
-def opening_span(plan: SkillPlan) -> np.ndarray | None:
-    """Where the TCP starts (the grasp) and ends ``plan``'s opening lines
-    (:data:`OPENING_LINES`), (2, 3) [m]; None for a plan without them."""
-    prev, start, end = plan.pre, None, None
-    for ph in plan.phases:
-        if not isinstance(ph, Line):
-            continue
-        if ph.name in OPENING_LINES:
-            start = prev[:3, 3] if start is None else start
-            end = ph.poses[-1][:3, 3]
-        prev = ph.poses[-1]
-    return None if start is None or end is None else np.stack([start, end])
+@dataclass(frozen=True, eq=False)
+class OpeningPath:
+    """Where an opening's lines (:data:`OPENING_LINES`) take the TCP, and the cabinet's
+    point at the grasp: what :func:`at_part_end` measures against.
 
+    Attributes:
+        points: the TCP path from the grasp to where the lines end, (n, 3) [m].
+        anchor: that grasp point in the cabinet base's frame when the skill started,
+            (3,) [m]; where the cabinet has moved it is how far the cabinet has given
+            where the hand pulls (:meth:`give`).
+    """
 
-def opening_share(tcp: np.ndarray, span: np.ndarray) -> Values:
-    """How far the commanded TCP ``tcp`` ((3,) or (n, 3)) [m] is along an opening
-    ``span`` (:func:`opening_span`): its straight-line distance from the grasp over
-    that of the path's end [-] (monotonic along a swing of up to 180 degrees)."""
-    full = float(np.linalg.norm(span[1] - span[0]))
-    return np.linalg.norm(np.asarray(tcp) - span[0], axis=-1) / max(full, 1e-9)
+    points: np.ndarray
+    anchor: np.ndarray
 
+    @classmethod
+    def of(cls, plan: SkillPlan, T_world_cabinet: np.ndarray) -> OpeningPath | None:
+        """``plan``'s opening path, the cabinet base at ``T_world_cabinet`` (4, 4) as the
+        skill starts; None for a plan without opening lines."""
+        prev, pts = plan.pre, []
+        for ph in plan.phases:
+            if not isinstance(ph, Line):
+                continue
+            if ph.name in OPENING_LINES:
+                pts += [prev[:3, 3]] if not pts else []
+                pts += list(ph.poses[:, :3, 3])
+            prev = ph.poses[-1]
+        if len(pts) < 2:
+            return None
+        T = T_world_cabinet
+        return cls(np.asarray(pts), T[:3, :3].T @ (pts[0] - T[:3, 3]))
 
-def grasp_anchor(T_world_cabinet: np.ndarray, span: np.ndarray) -> np.ndarray:
-    """The cabinet's point at an opening's grasp (``span[0]``, :func:`opening_span`)
-    in the cabinet base's frame ``T_world_cabinet`` (4, 4) when the skill started, and
-    in the world: (2, 3) [m] (:func:`cabinet_give`)."""
-    local = T_world_cabinet[:3, :3].T @ (span[0] - T_world_cabinet[:3, 3])
-    return np.stack([local, span[0]])
+    def share(self, tcp: np.ndarray) -> Values:
+        """How far the commanded TCP ``tcp`` ((3,) or (n, 3)) [m] is along the path: its
+        straight-line distance from the grasp over that of the path's end [-]
+        (monotonic along a swing of up to 180 degrees)."""
+        full = float(np.linalg.norm(self.points[-1] - self.points[0]))
+        return np.linalg.norm(np.asarray(tcp) - self.points[0], axis=-1) / max(full, 1e-9)
 
+    def tangent(self, tcp: np.ndarray) -> np.ndarray:
+        """The unit direction of the path where it passes nearest ``tcp`` ((3,) or (n,
+        3)) [m], the same shape."""
+        tcp = np.asarray(tcp, dtype=float)
+        d = np.linalg.norm(tcp[..., None, :] - self.points, axis=-1)
+        i = np.clip(np.argmin(d, axis=-1), 1, len(self.points) - 1)
+        t = self.points[i] - self.points[i - 1]
+        return t / np.maximum(np.linalg.norm(t, axis=-1, keepdims=True), 1e-12)
 
-def cabinet_give(pos: np.ndarray, quat: np.ndarray, anchor: np.ndarray) -> Values:
-    """How far the cabinet has given where an opening pulls it [m]: the distance the
-    point of it that was at the grasp (``anchor``, :func:`grasp_anchor`) has moved,
-    the cabinet base at ``pos`` ((3,) or (n, 3)) turned by ``quat`` ((4,) or (n, 4),
-    w x y z). A cabinet that tips toward the hand gives there before its base slides
-    (a drawer 1.06 m high pulled into its stop)."""
-    return np.linalg.norm(np.asarray(pos) + rotate(quat, anchor[0]) - anchor[1], axis=-1)
+    def give(self, pos: np.ndarray, quat: np.ndarray) -> np.ndarray:
+        """How the cabinet has moved at the grasp point, ((3,) or (n, 3)) [m]: the cabinet
+        base at ``pos`` ((3,) or (n, 3)) turned by ``quat`` ((4,) or (n, 4), w x y z).
+        A cabinet that tips toward the hand gives there before its base slides (a
+        drawer 1.06 m high pulled into its stop)."""
+        return np.asarray(pos) + rotate(quat, self.anchor) - self.points[0]
 
 
 def strained(give: Values, lag: Values, params: SkillParams) -> Flags:
-    """An opening's part no longer follows the hand: the cabinet has given ``give`` >
-    ``end_give`` where the hand pulls (:func:`cabinet_give`) or the hand lags ``lag``
-    > ``end_lag`` [m] behind its command."""
+    """An opening's part does not follow the hand: the cabinet has given ``give`` >
+    ``end_give`` where the hand pulls (:meth:`OpeningPath.give`) or the hand lags
+    ``lag`` > ``end_lag`` behind its command [m] (magnitudes, or components along the
+    path)."""
     return (give > params.end_give) | (lag > params.end_lag)
 
 
-def at_part_end(share: Values, strain: Flags, strained_before: Flags, params: SkillParams) -> Flags:
-    """Stop rule of an opening's lines, ``ok``: its part has met its end. The opening's
-    first strain (``strain``, :func:`strained`; ``strained_before``: there was one at
-    an earlier check) comes with the hand ``share`` >= ``end_share`` of the way. A part
-    that strains earlier does not move as the plan believes (a drawer swung as a door,
-    a door pulled straight): the other rules stop it."""
-    return strain & ~strained_before & (share >= params.end_share)
+def at_part_end(share: Values, early: Flags, along: Flags, params: SkillParams) -> Flags:
+    """Stop rule of an opening's lines, ``ok``: its part has met its end. The part
+    followed the hand, unstrained, for the first ``end_share`` of the path (not
+    ``early``: :func:`strained` in any direction before), and now, ``share`` >=
+    ``end_share`` along, it holds the hand back *along* the path (``along``:
+    :func:`strained` by the components along :meth:`OpeningPath.tangent`). A part that
+    strains early does not move as the plan believes (a drawer swung as a door, a door
+    pulled straight): the other rules stop it. A strain across the path (a hinge or an
+    axis a little off) is not an end."""
+    return ~early & (share >= params.end_share) & along
 
 
 def stop_detail(status: Status, name: str, amount: float = 0.0) -> str:

@@ -51,21 +51,18 @@ from strug_manip.control.driver import MONITOR_PERIOD, JointDriver
 from strug_manip.control.executor import (
     OPENING_LINES,
     STOW_SEED,
+    OpeningPath,
     at_part_end,
-    cabinet_give,
     cabinet_slid,
     clear_first,
     drive_posture,
     facts_before,
-    grasp_anchor,
     grasp_lost,
     held_back,
     holds,
     keeping_clear,
     keeps_object,
     near_posture,
-    opening_share,
-    opening_span,
     plan_stow,
     recovery_poses,
     report,
@@ -167,7 +164,7 @@ class FullRobot:
         before = facts_before(self.world)
         self._cab0 = before[1]
         self._cabinet0 = self.world.cabinet_pose()
-        self._strained = False  # the opening's part has stopped following the hand
+        self._early = False  # the opening's part strained in its first end_share
         phase = "plan"
         try:
             self._plan = plan
@@ -472,30 +469,37 @@ class FullRobot:
         if line is not None and line.tolerance is not None:
             tol = line.tolerance
         name = "free motion" if line is None else line.name
-        span = opening_span(self._plan) if line is not None and name in OPENING_LINES else None
-        anchor = None if span is None else grasp_anchor(self._cabinet0, span)
+        path = OpeningPath.of(self._plan, self._cabinet0) if name in OPENING_LINES else None
 
         def monitor(_: float) -> None:
             if line is not None and grasp_lost(line.holding, float(d.ten_length[tendon])):
                 raise SkillStop(Status.GRASP_LOST, stop_detail(Status.GRASP_LOST, name))
             slid = float(np.linalg.norm(self.world.cabinet_displacement_vector() - self._cab0))
             cmd = self.ctx.ik.forward(self._command())[:3, 3]
-            lag = float(np.linalg.norm(cmd - d.site_xpos[site]))
-            if span is not None and anchor is not None:
-                share = float(opening_share(cmd, span))
-                T = self.world.cabinet_pose()
-                give = float(cabinet_give(T[:3, 3], quat_of(T[:3, :3]), anchor))
-                strain = bool(strained(give, lag, p))
-                end = at_part_end(share, strain, self._strained, p)
-                self._strained |= strain
-                if end:
-                    raise SkillStop(Status.OK, stop_detail(Status.OK, name, share), name)
+            behind = cmd - d.site_xpos[site]
+            lag = float(np.linalg.norm(behind))
+            if path is not None:
+                self._check_end(path, cmd, behind, name)
             if cabinet_slid(slid, p):
                 raise SkillStop(Status.CABINET_MOVED, stop_detail(Status.CABINET_MOVED, name, slid))
             if held_back(lag, tol):
                 raise SkillStop(Status.COLLISION, stop_detail(Status.COLLISION, name, lag))
 
         return monitor
+
+    def _check_end(self, path: OpeningPath, cmd: np.ndarray, behind: np.ndarray, name: str) -> None:
+        """Stop ``ok`` where the opening's part has met its end (:func:`at_part_end`):
+        ``cmd`` the commanded TCP, ``behind`` how far the TCP is behind it, (3,) [m]."""
+        p = self.params
+        T = self.world.cabinet_pose()
+        give = path.give(T[:3, 3], quat_of(T[:3, :3]))
+        share = float(path.share(cmd))
+        if share < p.end_share:
+            self._early |= bool(strained(np.linalg.norm(give), np.linalg.norm(behind), p))
+            return
+        t = path.tangent(cmd)
+        if at_part_end(share, self._early, strained(give @ t, behind @ t, p), p):
+            raise SkillStop(Status.OK, stop_detail(Status.OK, name, share), name)
 
     def _check_slide(self, ref: np.ndarray, name: str) -> None:
         """Stop (``cabinet_moved``) when the cabinet base is more than

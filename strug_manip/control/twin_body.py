@@ -201,8 +201,8 @@ class PlanningTwin(TwinPrograms, TwinRollout):
         #: Where the cabinet stood (x, y) [m] when the current skill started.
         self.cabinet_xy0 = np.zeros(2)
         self.cabinet0 = np.eye(4)
-        #: An opening's part stopped following the hand at an earlier check of the run.
-        self._strained = False
+        #: An opening's part strained in its first ``end_share`` at an earlier check.
+        self._early = False
         self.reset()
 
     # -- state -------------------------------------------------------------------------

@@ -15,15 +15,12 @@ from strug_manip.control.driver import MONITOR_PERIOD
 from strug_manip.control.executor import (
     OPENING_LINES,
     REST_SPEED,
+    OpeningPath,
     at_part_end,
-    cabinet_give,
     cabinet_slid,
-    grasp_anchor,
     grasp_lost,
     held_back,
     keeps_object,
-    opening_share,
-    opening_span,
     recovery_poses,
     stop_detail,
     strained,
@@ -168,7 +165,7 @@ class TwinRollout:
         mujoco.mj_getState(m, d, start, ROLLOUT_STATE)
         parts: list[np.ndarray] = []
         warm = None  # a rollout's first step starts cold
-        self._strained = False  # no opening has strained yet (carried span to span)
+        self._early = False  # no opening has strained yet (carried span to span)
         for c in range(0, prog.free, HEAD_SPAN):
             span = ctrl[None, c : min(c + HEAD_SPAN, prog.free)]
             st, _ = rollout.rollout(m, d, start[None], span,
@@ -188,7 +185,7 @@ class TwinRollout:
         checked every 10 ms as on the full robot) and why; the last step if none.
         ``states``: the rollout's state after each of the program's steps, (nstep,
         nstate)."""
-        self._strained = False
+        self._early = False
         stop = self._first_stop(prog, self._monitored(prog), states, 0)
         return (len(states) - 1, Status.OK, "", "") if stop is None else stop
 
@@ -229,23 +226,9 @@ class TwinRollout:
         lost = check & grasp_lost(prog.held[sl], fingers)
         moved = check & cabinet_slid(slid, self.params)
         blocked = check & may_block & held_back(lag, prog.tol[sl])
-        span = opening_span(prog.plan)
-        share = np.zeros(len(states))
-        ended = np.zeros(len(states), dtype=bool)
-        if span is not None:
-            share = opening_share(prog.pos[sl], span)
-            c = self._cabinet_xy
-            give = cabinet_give(qpos[:, c : c + 3], qpos[:, c + 3 : c + 7],
-                                grasp_anchor(self.cabinet0, span))  # fmt: skip
-            strain = (
-                check & np.isin(prog.names[sl], OPENING_LINES) & strained(give, lag, self.params)
-            )
-            so_far = np.logical_or.accumulate(strain) | self._strained
-            before = np.r_[self._strained, so_far[:-1]]
-            ended = at_part_end(share, strain, before, self.params)
+        ended, share, early = self._part_end(prog, sl, check, states, tcp)
         stops = np.flatnonzero(lost | ended | moved | blocked)
-        if span is not None:  # what the next span's checks follow
-            self._strained = bool(so_far[stops[0]] if len(stops) else so_far[-1])
+        self._early = bool(early[stops[0]] if len(stops) else early[-1])  # for the next span
         if not len(stops):
             return None
         i = int(stops[0])
@@ -257,6 +240,33 @@ class TwinRollout:
         if moved[i]:
             return k, Status.CABINET_MOVED, stop_detail(Status.CABINET_MOVED, name, slid[i]), name
         return k, Status.COLLISION, stop_detail(Status.COLLISION, name, lag[i]), name
+
+    def _part_end(
+        self, prog: Program, sl: slice, check: np.ndarray, states: np.ndarray, tcp: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Where in the states (n, nstate) after the program's steps ``sl`` an opening's
+        part has met its end (:func:`~.executor.at_part_end`), (n,) bool; ``check``:
+        the monitors check there, ``tcp``: the hand's TCP there, (n, 3) [m]. Also the
+        share of the opening there (n,) and whether the opening strained in its first
+        ``end_share`` up to there (n,) (``_early``: before these states)."""
+        n = len(states)
+        path = OpeningPath.of(prog.plan, self.cabinet0)
+        if path is None:
+            return np.zeros(n, dtype=bool), np.zeros(n), np.full(n, self._early)
+        m, p = self.world.model, self.params
+        qpos = states[:, 1 : 1 + m.nq]
+        c = self._cabinet_xy
+        give = path.give(qpos[:, c : c + 3], qpos[:, c + 3 : c + 7])
+        cmd = prog.pos[sl]
+        behind = cmd - tcp
+        share = path.share(cmd)
+        opening = check & np.isin(prog.names[sl], OPENING_LINES)
+        strain = strained(np.linalg.norm(give, axis=1), np.linalg.norm(behind, axis=1), p)
+        first = opening & (share < p.end_share) & strain
+        early = np.logical_or.accumulate(first) | self._early
+        t = path.tangent(cmd)
+        along = strained(np.sum(give * t, axis=1), np.sum(behind * t, axis=1), p)
+        return opening & at_part_end(share, early, along, p), share, early
 
     def after(
         self, prog: Program, ctrl: np.ndarray, states: np.ndarray, judged: tuple
