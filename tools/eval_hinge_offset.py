@@ -50,22 +50,21 @@ VARIANTS: tuple[tuple[str, str, float], ...] = (
 
 def offset_joint(true: BelievedJoint, grasp: np.ndarray, kind: str, amount: float) -> BelievedJoint:
     """``true`` (world frame) with its hinge moved by ``amount`` (see :data:`VARIANTS`);
-    ``grasp`` (3,) is the handle's grasp point [m]."""
+    ``grasp`` (4, 4) is the handle's grasp pose (its x axis into the front)."""
     axis, origin = np.asarray(true.axis, float), np.asarray(true.origin, float)
-    to_handle = grasp - origin
-    u = to_handle - axis * (to_handle @ axis)  # in the front plane, hinge -> handle
-    u /= np.linalg.norm(u)
-    n = np.cross(axis, u)
-    n = -n if n[0] > 0 else n  # out of the front: toward the robot (world -x)
+    n = -grasp[:3, 0] - axis * (-grasp[:3, 0] @ axis)  # out of the front, toward the robot
+    n /= np.linalg.norm(n)
+    u = np.cross(n, axis)  # in the front plane, across the hinge
+    to_handle = grasp[:3, 3] - origin
+    u = u if u @ to_handle >= 0 else -u  # from the hinge toward the handle
     if kind == "radial":
         return BelievedJoint(true.type, axis, origin + amount * u, limit=true.limit)
     if kind == "depth":
         return BelievedJoint(true.type, axis, origin + amount * n, limit=true.limit)
     turn = axis_angle(n if kind == "tilt-in" else u, np.radians(amount))[:3, :3]
-    pivot = origin + axis * (to_handle @ axis)  # the hinge at the handle's height
-    new_axis = turn @ axis
-    return BelievedJoint(true.type, new_axis, pivot - new_axis * (to_handle @ axis),
-                         limit=true.limit)  # fmt: skip
+    h = to_handle @ axis
+    new_axis = turn @ axis  # about the hinge's point at the handle's height
+    return BelievedJoint(true.type, new_axis, origin + h * axis - h * new_axis, limit=true.limit)
 
 
 def open_once(world: ManipulationWorld, part, joint: BelievedJoint, ctx) -> dict:
@@ -107,7 +106,7 @@ def evaluate_seed(seed: int, ctx: ControlContext) -> dict:
             continue
         runs = {}
         for name, kind, amount in VARIANTS:
-            joint = offset_joint(true, grasps[0][:3, 3], kind, amount)
+            joint = offset_joint(true, grasps[0], kind, amount)
             runs[name] = open_once(world, part, joint, ctx)
         parts.append({"part": part.link, "runs": runs})
     world.close()

@@ -126,22 +126,25 @@ class SkillParams:
             (README): 3 cm leaves room for that and still stops a wrong pull at a
             third of the 0.1 m at which the task counts the cabinet dragged.
         end_share, end_give, end_lag: an opening ends where its part stops (its end, a
-            stop no view shows) when the part first stops following the hand (the
-            cabinet gives more than ``end_give`` [m] where the hand pulls it, by
-            sliding or tipping, or the hand lags more than ``end_lag`` [m]) after
-            the hand has followed ``end_share`` of the opening's path (the straight
-            line share from the grasp to where the path ends) [-]: the run then
-            lets go, backs off and stows as after a stop, and reports ``ok`` with the
-            part where it stopped. Why: a drawer's limit is not seen, and the belief
-            spreads it over 0.185-0.313 m on a drawer whose real limit is 0.213 m
-            (issue 37); a pull planned to a particle's longer limit drove the real
-            drawer into its stop and slid the cabinet 3 cm (``cabinet_moved``).
+            stop no view shows) when the part, having followed the hand unstrained
+            for the first ``end_share`` of the opening's path (the straight-line
+            share from the grasp to where the path ends) [-], holds it back *along*
+            the path: the cabinet gives more than ``end_give`` [m] where the hand
+            pulls it (sliding or tipping), or the hand lags more than ``end_lag``
+            [m], each counted along the path's direction there. The run then lets
+            go, backs off and stows as after a stop, and reports ``ok`` with the
+            part where it stopped. Why: a drawer's limit is not seen, and the
+            belief spreads it over 0.185-0.313 m on a drawer whose real limit is
+            0.213 m (issue 37); a pull planned to a particle's longer limit drove the
+            real drawer into its stop and slid the cabinet 3 cm (``cabinet_moved``).
             Measured on the 40 openings of the skills' test sample: under the right
             model the cabinet gives at most 6 mm and the hand lags at most 14 mm all
             the way; under a wrong one (a drawer swung as a door, a door pulled
             straight) the cabinet gives 16-64 mm, or the hand lags 23-57 mm, within
-            the first half of the path, where a limit error seldom stops a part (a
-            0.185 m drawer opened 0.25 m stops at 74 %), and the other rules stop it.
+            the first half, where a limit error seldom stops a part (a 0.185 m
+            drawer opened 0.25 m stops at 74 %), and the other rules stop it. Along
+            the path: a hinge or an axis a few centimetres or degrees off strains
+            the hand across its path, which is no end (docs/skills.md).
         settle_limit: after a skill the robot holds still, before it reports, while
             the cabinet still moves (:func:`~.executor.at_rest`), up to this long [s]:
             what it reports is where the cabinet came to rest. A cabinet the stow
