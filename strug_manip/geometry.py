@@ -109,6 +109,13 @@ def slerp(qa: np.ndarray, qb: np.ndarray, s: np.ndarray) -> np.ndarray:
     return q / np.linalg.norm(q, axis=1, keepdims=True)
 
 
+def z_axes(q: np.ndarray) -> np.ndarray:
+    """The z axes ((n, 3), or (3,) for (4,)) of the rotations of unit quaternions ``q``
+    ((n, 4) or (4,), w x y z)."""
+    w, x, y, z = np.moveaxis(np.asarray(q, dtype=float), -1, 0)
+    return np.stack([2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)], axis=-1)
+
+
 def x_axes(q: np.ndarray) -> np.ndarray:
     """The x axes (n, 3) of the rotations of unit quaternions ``q`` (n, 4)."""
     w, x, y, z = q.T

@@ -99,6 +99,21 @@ def cabinet_slid(slid: Values, params: SkillParams) -> Flags:
     return slid > params.cabinet_motion_limit
 
 
+def cabinet_tipped(up0: np.ndarray, up: np.ndarray, params: SkillParams) -> Flags:
+    """Stop rule ``cabinet_moved`` too: the cabinet's up axis ``up`` ((3,) or (n, 3))
+    has turned more than ``cabinet_tilt_limit`` from ``up0`` (3,) (since the skill
+    started, or a recovery): it tips. A cabinet pulled high up tips about its front
+    edge before its base slides (a drop flap's pull on a side door tipped one 29
+    degrees while its base moved 1.4 cm, and it fell over)."""
+    return np.asarray(up) @ up0 < np.cos(params.cabinet_tilt_limit)
+
+
+def tilt_of(up0: np.ndarray, up: np.ndarray) -> Values:
+    """The angle [rad] between the cabinet's up axes ``up0`` (3,) and ``up`` ((3,) or
+    (n, 3))."""
+    return np.arccos(np.clip(np.asarray(up) @ up0, -1.0, 1.0))
+
+
 def held_back(lag: Values, tol: Values) -> Flags:
     """Stop rule ``collision``: the gripper is ``lag`` [m] behind its commanded pose,
     more than the tracking tolerance ``tol`` [m] (the arm or hand is blocked)."""
@@ -184,6 +199,12 @@ def at_part_end(share: Values, early: Flags, along: Flags, params: SkillParams) 
     pulled straight): the other rules stop it. A strain across the path (a hinge or an
     axis a little off) is not an end."""
     return ~early & (share >= params.end_share) & along
+
+
+def tipped_detail(name: str, tilt: float) -> str:
+    """Why :func:`cabinet_tipped` stopped the motion ``name`` (``cabinet_moved``):
+    ``tilt`` [rad]."""
+    return f"the cabinet tipped {np.degrees(tilt):.1f} degrees ({name})"
 
 
 def stop_detail(status: Status, name: str, amount: float = 0.0) -> str:

@@ -54,6 +54,7 @@ from strug_manip.control.executor import (
     OpeningPath,
     at_part_end,
     cabinet_slid,
+    cabinet_tipped,
     clear_first,
     drive_posture,
     facts_before,
@@ -69,6 +70,8 @@ from strug_manip.control.executor import (
     settle,
     stop_detail,
     strained,
+    tilt_of,
+    tipped_detail,
 )
 from strug_manip.control.motion import (
     ArmMotionPlanner,
@@ -164,6 +167,7 @@ class FullRobot:
         before = facts_before(self.world)
         self._cab0 = before[1]
         self._cabinet0 = self.world.cabinet_pose()
+        self._up0 = self._cabinet0[:3, 2].copy()
         self._early = False  # the opening's part strained in its first end_share
         phase = "plan"
         try:
@@ -222,9 +226,10 @@ class FullRobot:
         # A recovery that slides the cabinet (an arm stowed through a part that is not
         # where the robot believes it) stops where it is, as a skill does.
         ref = self.world.cabinet_displacement_vector()
+        up = self.world.cabinet_pose()[:3, 2]
 
         def monitor(_: float) -> None:
-            self._check_slide(ref, "recovery")
+            self._check_slide(ref, up, "recovery")
 
         try:
             if backs_off:
@@ -482,6 +487,7 @@ class FullRobot:
                 self._check_end(path, cmd, behind, name)
             if cabinet_slid(slid, p):
                 raise SkillStop(Status.CABINET_MOVED, stop_detail(Status.CABINET_MOVED, name, slid))
+            self._check_tilt(self._up0, name)
             if held_back(lag, tol):
                 raise SkillStop(Status.COLLISION, stop_detail(Status.COLLISION, name, lag))
 
@@ -501,12 +507,21 @@ class FullRobot:
         if at_part_end(share, self._early, strained(give @ t, behind @ t, p), p):
             raise SkillStop(Status.OK, stop_detail(Status.OK, name, share), name)
 
-    def _check_slide(self, ref: np.ndarray, name: str) -> None:
+    def _check_slide(self, ref: np.ndarray, up0: np.ndarray, name: str) -> None:
         """Stop (``cabinet_moved``) when the cabinet base is more than
-        ``cabinet_motion_limit`` from ``ref`` (a displacement vector (2,) [m])."""
+        ``cabinet_motion_limit`` from ``ref`` (a displacement vector (2,) [m]) or its
+        up axis more than ``cabinet_tilt_limit`` from ``up0`` (3,)."""
         slid = float(np.linalg.norm(self.world.cabinet_displacement_vector() - ref))
         if cabinet_slid(slid, self.params):
             raise SkillStop(Status.CABINET_MOVED, stop_detail(Status.CABINET_MOVED, name, slid))
+        self._check_tilt(up0, name)
+
+    def _check_tilt(self, up0: np.ndarray, name: str) -> None:
+        """Stop (``cabinet_moved``) when the cabinet's up axis is more than
+        ``cabinet_tilt_limit`` from ``up0`` (3,): it tips."""
+        up = self.world.cabinet_pose()[:3, 2]
+        if cabinet_tipped(up0, up, self.params):
+            raise SkillStop(Status.CABINET_MOVED, tipped_detail(name, float(tilt_of(up0, up))))
 
     def _command(self) -> dict[str, float]:
         return {

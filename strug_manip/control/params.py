@@ -125,6 +125,14 @@ class SkillParams:
             right model moves it by millimetres, a top flap lifted open by up to 2 cm
             (README): 3 cm leaves room for that and still stops a wrong pull at a
             third of the 0.1 m at which the task counts the cabinet dragged.
+        cabinet_tilt_limit: the cabinet's up axis turned more than this from where it
+            was when the skill started stops the skill too (``cabinet_moved``) [rad]:
+            a cabinet pulled high up tips about its front edge before its base
+            slides (a drop flap's pull on a side door, episode 9101 of OpenDoor,
+            tipped one 29 degrees while its base moved 1.4 cm, and it fell over). 4
+            degrees: an opening under the right model tipped the demo's cabinet 2.4
+            degrees (before the ``ease`` line), and 4 degrees at the top of a 1 m
+            cabinet is the 7 cm its hand has pulled it by then.
         end_share, end_give, end_lag: an opening ends where its part stops (its end, a
             stop no view shows) when the part, having followed the hand unstrained
             for the first ``end_share`` of the opening's path (the straight-line
@@ -204,6 +212,7 @@ class SkillParams:
     free_clearance: float = 0.03
     clear_checks: int = 12_000
     cabinet_motion_limit: float = 0.03
+    cabinet_tilt_limit: float = 0.07
     end_share: float = 0.5
     end_give: float = 0.01
     end_lag: float = 0.02

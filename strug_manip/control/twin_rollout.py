@@ -18,16 +18,19 @@ from strug_manip.control.executor import (
     OpeningPath,
     at_part_end,
     cabinet_slid,
+    cabinet_tipped,
     grasp_lost,
     held_back,
     keeps_object,
     recovery_poses,
     stop_detail,
     strained,
+    tilt_of,
+    tipped_detail,
 )
 from strug_manip.control.outcome import Status
 from strug_manip.control.twin_program import COAST_TIME, Program
-from strug_manip.geometry import x_axes
+from strug_manip.geometry import x_axes, z_axes
 from strug_manip.robot.fetch import GRIPPER_OPEN, GRIPPER_SQUEEZE
 from strug_manip.world.floating_gripper import ARM_PARK
 
@@ -224,10 +227,13 @@ class TwinRollout:
         )
         lag = np.linalg.norm(tcp - prog.pos[sl], axis=1)
         lost = check & grasp_lost(prog.held[sl], fingers)
+        c = self._cabinet_xy
+        up = z_axes(qpos[:, c + 3 : c + 7])
+        tipped = check & cabinet_tipped(self.cabinet0[:3, 2], up, self.params)
         moved = check & cabinet_slid(slid, self.params)
         blocked = check & may_block & held_back(lag, prog.tol[sl])
         ended, share, early = self._part_end(prog, sl, check, states, tcp)
-        stops = np.flatnonzero(lost | ended | moved | blocked)
+        stops = np.flatnonzero(lost | ended | moved | tipped | blocked)
         self._early = bool(early[stops[0]] if len(stops) else early[-1])  # for the next span
         if not len(stops):
             return None
@@ -239,6 +245,9 @@ class TwinRollout:
             return k, Status.OK, stop_detail(Status.OK, name, float(share[i])), name
         if moved[i]:
             return k, Status.CABINET_MOVED, stop_detail(Status.CABINET_MOVED, name, slid[i]), name
+        if tipped[i]:
+            tilt = float(tilt_of(self.cabinet0[:3, 2], up[i]))
+            return k, Status.CABINET_MOVED, tipped_detail(name, tilt), name
         return k, Status.COLLISION, stop_detail(Status.COLLISION, name, lag[i]), name
 
     def _part_end(
@@ -349,7 +358,11 @@ class TwinRollout:
         a = 1 + self._cabinet_xy
         every = self._check_every()
         slid = self._slid(states, start[a : a + 2])
-        over = np.flatnonzero(cabinet_slid(slid[every - 1 :: every], self.params))
+        up = z_axes(states[:, a + 3 : a + 7])
+        moved = cabinet_slid(slid, self.params) | cabinet_tipped(
+            z_axes(start[a + 3 : a + 7]), up, self.params
+        )
+        over = np.flatnonzero(moved[every - 1 :: every])
         return states if not len(over) else states[: (int(over[0]) + 1) * every]
 
     def _slid(self, states: np.ndarray, xy0: np.ndarray) -> np.ndarray:
