@@ -1,5 +1,6 @@
 """Issue 37: an opening ends where its part stops (a limit no view shows), in both
-bodies, while a part that does not move as believed still stops the run.
+bodies, while a part that does not move as believed still stops the run; a pull that
+tips the cabinet stops before it falls.
 
 Cabinets: generator seeds 11 (drawers) and 25 (doors) as in ``tests/test_skills.py``,
 the opened part's real limit cut to 0.7 of the generator's, the skill planned against
@@ -22,9 +23,9 @@ from strug_manip.control import (
     Status,
     handle_grasps,
 )
-from strug_manip.control.executor import OpeningPath, at_part_end, strained
-from strug_manip.geometry import quat_of
-from strug_manip.objects.hypotheses import BelievedJoint
+from strug_manip.control.executor import OpeningPath, at_part_end, cabinet_tipped, strained
+from strug_manip.geometry import quat_of, z_axes
+from strug_manip.objects.hypotheses import BelievedJoint, believed_spec, cell_joints
 from strug_manip.world.scene import SceneConfig
 from strug_manip.world.sim import ManipulationWorld
 
@@ -109,6 +110,13 @@ def test_the_cabinets_give_is_where_the_hand_pulls() -> None:
     R = np.array([[np.cos(tilt), 0, np.sin(tilt)], [0, 1, 0], [-np.sin(tilt), 0, np.cos(tilt)]])
     give = path.give(np.zeros(3), quat_of(R))
     assert np.linalg.norm(give) == pytest.approx(np.linalg.norm(path.anchor) * tilt, rel=0.01)
+    # The tilt rule reads the cabinet's up axis from its quaternion.
+    ups = z_axes(np.stack([[1.0, 0, 0, 0], quat_of(R)]))
+    assert np.allclose(ups, [[0, 0, 1.0], R[:, 2]]) and np.allclose(z_axes(quat_of(R)), R[:, 2])
+    p = SkillParams()
+    assert cabinet_tipped(np.array([0, 0, 1.0]), ups, dataclasses.replace(
+        p, cabinet_tilt_limit=0.01)).tolist() == [False, True]  # fmt: skip
+    assert not cabinet_tipped(np.array([0, 0, 1.0]), ups, p).any()
     both = path.give(np.zeros((2, 3)), np.stack([[1.0, 0, 0, 0], quat_of(R)]))
     assert np.allclose(both, [np.zeros(3), give])
     end = np.linalg.norm([0.2, 0.2])
@@ -126,3 +134,36 @@ def test_an_opening_plan_has_a_path_and_a_probe_none(ctx) -> None:
     assert np.allclose(path.points[0], lines["approach"].poses[-1][:3, 3])
     assert np.allclose(path.points[-1], lines["ease"].poses[-1][:3, 3])
     assert OpeningPath.of(PullH(skill.g).plan(believed), np.eye(4)) is None
+
+
+def test_a_pull_that_tips_the_cabinet_stops_before_it_falls(ctx) -> None:
+    """A side door swung as a drop-down flap (the tests' ``doors_25``, ``link_2``) tips
+    the cabinet about its front edge while its base hardly slides: without the tilt
+    rule it falls over; with it the run stops ``cabinet_moved`` at the rule's tilt, on
+    the full robot and the twin, and the cabinet stands."""
+    world = ManipulationWorld(SceneConfig(cabinet_seed=25, cabinet_kinds=("door",)))
+    spec, T = world.scene.cabinet_spec, world.scene.T_world_cabinet
+    flap = cell_joints(spec.part("link_2"))["bottom"]
+    as_flap = BelievedJoint(flap.type, T[:3, :3] @ flap.axis, (T @ np.r_[flap.origin, 1.0])[:3])
+    bspec = believed_spec(spec, "link_2", as_flap, T)
+    believed = ManipulationWorld.from_cabinet_spec(bspec, world.config)
+    part = bspec.part("link_2")
+    skill = OpenDoor(handle_grasps(part, 0.0, T)[0], BelievedJoint.of_part(part, 0.0, T))
+    p = SkillParams()
+
+    def tilt_deg(w: ManipulationWorld) -> float:
+        return float(np.degrees(np.arccos(np.clip(w.cabinet_pose()[2, 2], -1.0, 1.0))))
+
+    off = skill.run(world, ctx=ctx, params=dataclasses.replace(p, cabinet_tilt_limit=3.0),
+                    plan_world=believed)  # fmt: skip
+    assert tilt_deg(world) > 30.0, off.summary()  # fallen (or falling) over
+    world.reset()
+    believed.reset()
+    out = skill.run(world, ctx=ctx, plan_world=believed)
+    assert out.status is Status.CABINET_MOVED and "tipped" in out.detail, out.summary()
+    assert tilt_deg(world) < 1.0 and out.cabinet_motion < p.cabinet_motion_limit, out.summary()
+    twin = PlanningTwin(spec, world.config, ctx)
+    twin.reset()
+    believed.reset()
+    tw = skill.simulate(twin, plan_world=believed)
+    assert tw.status is Status.CABINET_MOVED and "tipped" in tw.detail, tw.summary()
