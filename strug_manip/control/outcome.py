@@ -42,7 +42,8 @@ class Status(StrEnum):
     GRASP_LOST = "grasp_lost"
     COLLISION = "collision"
     TIMEOUT = "timeout"
-    #: The cabinet slid more than ``SkillParams.cabinet_motion_limit`` during the skill.
+    #: The cabinet slid more than ``SkillParams.cabinet_motion_limit``, or tipped more
+    #: than ``SkillParams.cabinet_tilt_limit``, during the skill.
     CABINET_MOVED = "cabinet_moved"
 
 

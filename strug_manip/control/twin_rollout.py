@@ -350,7 +350,8 @@ class TwinRollout:
     def _until_slid(self, states: np.ndarray, start: np.ndarray) -> np.ndarray:
         """The recovery's rollout ``states`` (n, nstate) up to the first check (as in
         :meth:`judge`) at which the cabinet has slid more than ``cabinet_motion_limit``
-        since ``start`` (all of them if it never does). The full robot's recovery is
+        or tipped more than ``cabinet_tilt_limit`` since ``start`` (all of them if it
+        never does). The full robot's recovery is
         monitored so (:meth:`~strug_manip.control.fetch_body.FullRobot._recover`): its
         arm stops where it is. Unmonitored, a hand caught on a handle as it backs off
         would drag the twin's cabinet on for the whole back-off, a drag no full robot
