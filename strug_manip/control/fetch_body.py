@@ -46,15 +46,12 @@ import mujoco
 import numpy as np
 
 from planners.errors import ConfigError
+from strug_manip.control.cabinet_guard import CabinetGuard
 from strug_manip.control.context import ControlContext
 from strug_manip.control.driver import MONITOR_PERIOD, JointDriver
 from strug_manip.control.executor import (
     OPENING_LINES,
     STOW_SEED,
-    OpeningPath,
-    at_part_end,
-    cabinet_slid,
-    cabinet_tipped,
     clear_first,
     drive_posture,
     facts_before,
@@ -69,9 +66,6 @@ from strug_manip.control.executor import (
     report,
     settle,
     stop_detail,
-    strained,
-    tilt_of,
-    tipped_detail,
 )
 from strug_manip.control.motion import (
     ArmMotionPlanner,
@@ -84,7 +78,6 @@ from strug_manip.control.outcome import Outcome, SkillStop, Status
 from strug_manip.control.params import DEFAULT_PARAMS, SkillParams
 from strug_manip.control.placement import Placement, find_placement
 from strug_manip.control.plan import Grip, Line, SkillPlan
-from strug_manip.geometry import quat_of
 from strug_manip.robot.fetch import (
     ARM_TORSO_JOINTS,
     BASE_JOINTS,
@@ -165,10 +158,7 @@ class FullRobot:
         self.ik_seconds = self.plan_seconds = 0.0
         self.n_plans = 0
         before = facts_before(self.world)
-        self._cab0 = before[1]
-        self._cabinet0 = self.world.cabinet_pose()
-        self._up0 = self._cabinet0[:3, 2].copy()
-        self._early = False  # the opening's part strained in its first end_share
+        self._guard = CabinetGuard(self.world, self.params)
         phase = "plan"
         try:
             self._plan = plan
@@ -225,11 +215,10 @@ class FullRobot:
             checker.allow()
         # A recovery that slides the cabinet (an arm stowed through a part that is not
         # where the robot believes it) stops where it is, as a skill does.
-        ref = self.world.cabinet_displacement_vector()
-        up = self.world.cabinet_pose()[:3, 2]
+        since = self._guard.here()
 
         def monitor(_: float) -> None:
-            self._check_slide(ref, up, "recovery")
+            self._guard.check("recovery", since)
 
         try:
             if backs_off:
@@ -464,9 +453,9 @@ class FullRobot:
     def _line_monitor(self, line: Line | None) -> Callable[[float], None]:
         """Stops a motion when the grasp of ``line`` is lost (if it holds something),
         an opening's part has met its end (:func:`~.executor.at_part_end`: stopped
-        ``ok``), the cabinet has slid more than ``cabinet_motion_limit`` since the skill
-        started, or the gripper lags more than the tracking tolerance behind its
-        command (None: a free motion)."""
+        ``ok``), the cabinet has slid or tipped past its guards since the skill started
+        (:class:`~.cabinet_guard.CabinetGuard`), or the gripper lags more than the
+        tracking tolerance behind its command (None: a free motion)."""
         m, d, p = self.world.model, self.world.data, self.params
         tendon = m.tendon("gripper").id
         site = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, GRIPPER_SITE)
@@ -474,54 +463,22 @@ class FullRobot:
         if line is not None and line.tolerance is not None:
             tol = line.tolerance
         name = "free motion" if line is None else line.name
-        path = OpeningPath.of(self._plan, self._cabinet0) if name in OPENING_LINES else None
+        guard = self._guard
+        path = guard.opening(self._plan) if name in OPENING_LINES else None
 
         def monitor(_: float) -> None:
             if line is not None and grasp_lost(line.holding, float(d.ten_length[tendon])):
                 raise SkillStop(Status.GRASP_LOST, stop_detail(Status.GRASP_LOST, name))
-            slid = float(np.linalg.norm(self.world.cabinet_displacement_vector() - self._cab0))
             cmd = self.ctx.ik.forward(self._command())[:3, 3]
             behind = cmd - d.site_xpos[site]
             lag = float(np.linalg.norm(behind))
             if path is not None:
-                self._check_end(path, cmd, behind, name)
-            if cabinet_slid(slid, p):
-                raise SkillStop(Status.CABINET_MOVED, stop_detail(Status.CABINET_MOVED, name, slid))
-            self._check_tilt(self._up0, name)
+                guard.check_end(path, cmd, behind, name)
+            guard.check(name)
             if held_back(lag, tol):
                 raise SkillStop(Status.COLLISION, stop_detail(Status.COLLISION, name, lag))
 
         return monitor
-
-    def _check_end(self, path: OpeningPath, cmd: np.ndarray, behind: np.ndarray, name: str) -> None:
-        """Stop ``ok`` where the opening's part has met its end (:func:`at_part_end`):
-        ``cmd`` the commanded TCP, ``behind`` how far the TCP is behind it, (3,) [m]."""
-        p = self.params
-        T = self.world.cabinet_pose()
-        give = path.give(T[:3, 3], quat_of(T[:3, :3]))
-        share = float(path.share(cmd))
-        if share < p.end_share:
-            self._early |= bool(strained(np.linalg.norm(give), np.linalg.norm(behind), p))
-            return
-        t = path.tangent(cmd)
-        if at_part_end(share, self._early, strained(give @ t, behind @ t, p), p):
-            raise SkillStop(Status.OK, stop_detail(Status.OK, name, share), name)
-
-    def _check_slide(self, ref: np.ndarray, up0: np.ndarray, name: str) -> None:
-        """Stop (``cabinet_moved``) when the cabinet base is more than
-        ``cabinet_motion_limit`` from ``ref`` (a displacement vector (2,) [m]) or its
-        up axis more than ``cabinet_tilt_limit`` from ``up0`` (3,)."""
-        slid = float(np.linalg.norm(self.world.cabinet_displacement_vector() - ref))
-        if cabinet_slid(slid, self.params):
-            raise SkillStop(Status.CABINET_MOVED, stop_detail(Status.CABINET_MOVED, name, slid))
-        self._check_tilt(up0, name)
-
-    def _check_tilt(self, up0: np.ndarray, name: str) -> None:
-        """Stop (``cabinet_moved``) when the cabinet's up axis is more than
-        ``cabinet_tilt_limit`` from ``up0`` (3,): it tips."""
-        up = self.world.cabinet_pose()[:3, 2]
-        if cabinet_tipped(up0, up, self.params):
-            raise SkillStop(Status.CABINET_MOVED, tipped_detail(name, float(tilt_of(up0, up))))
 
     def _command(self) -> dict[str, float]:
         return {
