@@ -29,6 +29,12 @@ DEMO_SEED, DEMO_SOLVER = 0, "strug"
 MAX_SLIDE_BACK = 0.03
 
 
+#: The demo's cabinet base moves less than this in the whole episode [m]: two thirds of
+#: the slide guard (``SkillParams.cabinet_motion_limit``, 3 cm) that stopped the
+#: demo's first opening when its pull ran into the drawer's stop.
+CABINET_STOOD = 0.02
+
+
 class _Enough(Exception):  # noqa: N818 (control flow, not an error)
     """Stops the episode after the steps the test looks at."""
 
@@ -59,7 +65,10 @@ def test_the_demos_first_steps_leave_the_cabinet_and_let_no_drawer_slide_back() 
         for joint, adr in joints.items():
             q = out.qpos[:, adr]
             assert q[-1] > q.max() - MAX_SLIDE_BACK, (out.summary(), joint, q.max(), q[-1])
-    assert displacement < 0.01  # the base (the 0.1 m rule's), through both steps
+    # The base (the 0.1 m rule's), through both steps: well inside the slide guard's 3
+    # cm. 7 mm until the openings ended at the part's end (issue 37); since, the
+    # second opening pulls the top drawer 0.18 m instead of 0.13 m, and 13 mm.
+    assert displacement < CABINET_STOOD
 
 
 #: The demo's episode at 2cdb37e (issue 37): its real steps, each ``ok``, the last
@@ -94,4 +103,4 @@ def test_the_demos_episode_places_the_object_and_earns_the_plus_10() -> None:
     assert all(s.reward == 0.0 for s in result.steps[:-1]), observations
     assert skills[-1] == "Place" and set(statuses) == {"ok"}, (skills, statuses)
     assert len(skills) <= len(DEMO_SKILLS), observations
-    assert displacement < 0.01, displacement  # the base stayed (the 0.1 m rule's)
+    assert displacement < CABINET_STOOD, displacement  # the base stayed (the 0.1 m rule's)
