@@ -71,7 +71,13 @@ from strug_manip.cache import LRU
 from strug_manip.control.base_servo import BaseServo
 from strug_manip.control.contacts import HAND_BODIES
 from strug_manip.control.context import ControlContext
-from strug_manip.control.executor import drive_posture, facts_before, holds, report
+from strug_manip.control.executor import (
+    OpeningPath,
+    drive_posture,
+    facts_before,
+    holds,
+    report,
+)
 from strug_manip.control.outcome import Outcome, SkillStop, Status
 from strug_manip.control.params import DEFAULT_PARAMS, SkillParams
 from strug_manip.control.placement import Placement, find_placement, work_frame
@@ -203,6 +209,7 @@ class PlanningTwin(TwinPrograms, TwinRollout):
         self.cabinet0 = np.eye(4)
         #: An opening's part strained in its first ``end_share`` at an earlier check.
         self._early = False
+        self._opening: OpeningPath | None = None  # the current run's, once per run
         self.reset()
 
     # -- state -------------------------------------------------------------------------

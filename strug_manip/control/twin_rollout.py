@@ -169,6 +169,7 @@ class TwinRollout:
         parts: list[np.ndarray] = []
         warm = None  # a rollout's first step starts cold
         self._early = False  # no opening has strained yet (carried span to span)
+        self._opening = OpeningPath.of(prog.plan, self.cabinet0)  # once, not per span
         for c in range(0, prog.free, HEAD_SPAN):
             span = ctrl[None, c : min(c + HEAD_SPAN, prog.free)]
             st, _ = rollout.rollout(m, d, start[None], span,
@@ -189,6 +190,7 @@ class TwinRollout:
         ``states``: the rollout's state after each of the program's steps, (nstep,
         nstate)."""
         self._early = False
+        self._opening = OpeningPath.of(prog.plan, self.cabinet0)
         stop = self._first_stop(prog, self._monitored(prog), states, 0)
         return (len(states) - 1, Status.OK, "", "") if stop is None else stop
 
@@ -257,9 +259,10 @@ class TwinRollout:
         part has met its end (:func:`~.executor.at_part_end`), (n,) bool; ``check``:
         the monitors check there, ``tcp``: the hand's TCP there, (n, 3) [m]. Also the
         share of the opening there (n,) and whether the opening strained in its first
-        ``end_share`` up to there (n,) (``_early``: before these states)."""
+        ``end_share`` up to there (n,) (``_early``: before these states; ``_opening``:
+        the run's opening path, set by :meth:`head` or :meth:`judge`)."""
         n = len(states)
-        path = OpeningPath.of(prog.plan, self.cabinet0)
+        path = self._opening
         if path is None:
             return np.zeros(n, dtype=bool), np.zeros(n), np.full(n, self._early)
         m, p = self.world.model, self.params
