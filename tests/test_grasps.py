@@ -176,18 +176,19 @@ def test_place_targets_are_inside_and_open_enough_is_the_targets_rule(cabinets) 
 def test_a_drawer_offers_a_second_place_nearer_its_front_wall(cabinets) -> None:
     """The second target of an open drawer keeps the object inside, CLEARANCE from the
     front wall (farther from the fronts above); both are lowered into from ABOVE_WALLS
-    over the box's walls, then again from place_clearance (lift 0); a cell offers one
-    target."""
+    over the box's walls, then again from place_clearance (lift 0), then skimming the
+    walls (their own test); a cell offers one target."""
     from strug_manip.control.targets import ABOVE_WALLS
 
     spec, T = cabinets["drawers_11"], np.eye(4)
     part = spec.part("link_1")
     q = 0.9 * part.upper
-    first, second, *low = place_targets(spec, "link_1", q, T)
+    first, second, *low = place_targets(spec, "link_1", q, T)[:4]
     walls = part.point_at(part.interior_center, q)[2] + part.interior_size[2] / 2
     bottom = first.p[2, 3] - OBJECT_HALF_SIZE[2]
     assert first.lift == second.lift == pytest.approx(walls + ABOVE_WALLS - bottom)
     assert [t.lift for t in low] == [0.0, 0.0]
+    assert not any(t.skim for t in (first, second, *low))
     assert [t.p.tobytes() for t in low] == [first.p.tobytes(), second.p.tobytes()]
     assert first.grasp == second.grasp == "top"
     np.testing.assert_array_equal(first.p[:3, :3], second.p[:3, :3])
@@ -200,6 +201,42 @@ def test_a_drawer_offers_a_second_place_nearer_its_front_wall(cabinets) -> None:
     assert second.p[0, 3] == pytest.approx(front_wall - CLEARANCE - reach)
     assert place_target(spec, "link_1", q, T).p.tobytes() == first.p.tobytes()
     assert len(place_targets(cabinets["mixed_17"], "link_5", 1.4, T)) == 1
+
+
+def test_a_drawer_out_of_reach_from_above_is_skimmed_then_dropped_into() -> None:
+    """After the targets lowered from high up, a drawer's places follow lowered from
+    just over its walls (SKIM_OVER, ``skim``: from exactly that height); a deep box adds
+    its places let go DROPS above the floor, the object's top DROP_BELOW_WALLS or more
+    under the walls' top, lowered into from as high as the first; a shallower box adds
+    fewer or none; every target's object centre is inside the drawer."""
+    from strug_manip.control.targets import DROP_BELOW_WALLS, DROPS, SKIM_OVER
+
+    spec, T = generate_cabinet(88, kinds=("drawer",)), np.eye(4)  # 8.5 to 29 cm deep
+    h = 2 * OBJECT_HALF_SIZE[2]
+    added = []
+    for part in spec.movable_parts:
+        q = 0.9 * part.upper
+        targets = place_targets(spec, part.link, q, T)
+        n = 2 if targets[1].p[0, 3] > targets[0].p[0, 3] else 1  # places per height
+        walls = float(part.interior_size[2])
+        floor = part.point_at(part.interior_center, q)[2] - walls / 2
+        skims = targets[2 * n : (2 + len(SKIM_OVER)) * n]
+        assert [t.skim for t in skims] == [True] * len(skims)
+        assert [t.lift for t in skims] == pytest.approx(
+            [walls + o for o in SKIM_OVER for _ in range(n)]
+        )
+        drops = targets[(2 + len(SKIM_OVER)) * n :]
+        deep = [r for r in DROPS if r + h <= walls - DROP_BELOW_WALLS]
+        assert len(drops) == len(deep) * n
+        added.append(len(deep))
+        for k, t in enumerate(drops):
+            assert not t.skim
+            assert t.p[2, 3] - OBJECT_HALF_SIZE[2] == pytest.approx(floor + deep[k // n])
+            start = t.p[2, 3] + t.lift
+            assert start == pytest.approx(targets[0].p[2, 3] + targets[0].lift)
+        for t in targets:
+            assert inside(spec, part.link, q, T, t.p)
+    assert min(added) == 0 and max(added) == len(DROPS), added
 
 
 def _drop_down_flaps(seeds: range) -> list:

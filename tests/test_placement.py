@@ -13,9 +13,10 @@ import re
 import numpy as np
 import pytest
 
-from strug_manip.control import OpenDrawer, SkillPlan, handle_grasps
+from strug_manip.control import OpenDrawer, Place, SkillPlan, handle_grasps
 from strug_manip.control.driver import BASE_SPEED
 from strug_manip.control.outcome import SkillStop, Status
+from strug_manip.control.params import DEFAULT_PARAMS
 from strug_manip.control.placement import (
     CANDIDATES,
     HAND_IN_COLLISION,
@@ -25,8 +26,15 @@ from strug_manip.control.placement import (
     find_placement,
 )
 from strug_manip.control.plan import line_of, straight
+from strug_manip.geometry import axis_angle
 from strug_manip.objects.hypotheses import BelievedJoint
-from strug_manip.robot.fetch import ARM_TORSO_JOINTS, BASE_JOINTS, TUCK, speed_limits
+from strug_manip.robot.fetch import (
+    ARM_TORSO_JOINTS,
+    BASE_JOINTS,
+    GRIPPER_SITE,
+    TUCK,
+    speed_limits,
+)
 
 POS_TOL, ROT_TOL = 0.01, 0.05
 
@@ -187,3 +195,26 @@ def test_a_hint_from_a_similar_plan_is_tried_first_and_taken_if_it_works(world, 
     assert hints.get(SkillPlan(plan.skill, far @ plan.pre, ()), np.zeros(3)) is None
     assert hints.get(near, np.array([0.5, 0.0, 0.0])) is None  # another base
     assert hints.get(SkillPlan("Push", near.pre, near.phases), np.zeros(3)) is None
+
+
+def test_a_skimming_place_starts_exactly_its_lift_over_the_place(world) -> None:
+    """A Place from above starts ``place_clearance`` over its place, or ``lift`` if
+    higher; a skimming one (a drawer too high up to start higher) exactly ``lift``
+    over it, and it retreats as high."""
+    world.reset()
+    held = np.eye(4)  # the object in the fingers, the gripper's approach down once level
+    held[:3, :3] = axis_angle(np.array([0.0, 1.0, 0.0]), -0.5 * np.pi)
+    world.set_object_pose(world.site_pose(GRIPPER_SITE) @ held)
+    p = np.eye(4)
+    p[:3, 3] = (0.9, 0.0, 1.2)
+    drop = DEFAULT_PARAMS.place_drop
+    cases = [(0.05, False, DEFAULT_PARAMS.place_clearance), (0.2, False, 0.2),
+             (0.05, True, 0.05), (0.0, True, DEFAULT_PARAMS.place_clearance)]  # fmt: skip
+    for lift, skim, start in cases:
+        plan = Place("object", p, lift, skim).plan(world)
+        release = plan.lines[0].poses[-1]
+        assert release[2, 0] < -0.99  # from above
+        assert release[2, 3] == pytest.approx(p[2, 3] + drop, abs=0.02)
+        assert plan.pre[2, 3] - release[2, 3] == pytest.approx(start, abs=1e-9)
+        assert plan.lines[-1].poses[-1][2, 3] - release[2, 3] == pytest.approx(start, abs=1e-9)
+    world.reset()

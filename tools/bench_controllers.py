@@ -165,7 +165,7 @@ def other_skills(ctx: ControlContext) -> dict[str, tuple]:
     open_door = OpenDoor(handle_grasps(door, 0.0, T)[0], BelievedJoint.of_part(door, 0.0, T))
     target = place_target(spec, drawer.link, 0.2, T)
     pick = Pick("object", target.grasp)
-    place = Place("object", target.p, target.lift)
+    place = Place.onto(target)
 
     def case(skill, parts: dict[str, float], full_only: bool = False) -> tuple:
         return (

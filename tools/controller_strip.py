@@ -85,7 +85,7 @@ def main() -> None:
     a = Pick("object", target.grasp).run(
         drawers, ctx=ctx, observer=grab(drawers, frames, ("grasp", "lift"), "pick ")
     )
-    b = Place("object", target.p, target.lift).run(
+    b = Place.onto(target).run(
         drawers, ctx=ctx, observer=grab(drawers, frames, ("pre-grasp", "release", "end"), "place ")
     )
     rows.append((f"Pick: {a.status}, Place: {b.status}", frames))

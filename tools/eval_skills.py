@@ -240,7 +240,7 @@ def evaluate_part(world, twins: dict, spec, part, ctx, only_twin: bool = False) 
         chain = {"pick": str(pick.status), "place": None, "ok": False}
         if pick.ok:
             for tgt in tgts:  # the next where no base placement reaches one (no motion)
-                place = Place("object", tgt.p, tgt.lift).run(world, ctx=ctx)
+                place = Place.onto(tgt).run(world, ctx=ctx)
                 if place.status != "ik_infeasible":
                     break
             chain["place"] = str(place.status)

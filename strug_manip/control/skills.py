@@ -67,6 +67,7 @@ from strug_manip.control.plan import (
     retreat_poses,
     straight,
 )
+from strug_manip.control.targets import PlaceTarget
 from strug_manip.control.twin_body import BoundTwin, PlanningTwin
 from strug_manip.objects.hypotheses import BelievedJoint, check_pose
 from strug_manip.world.scene import OBJECT_HALF_SIZE
@@ -528,12 +529,22 @@ class Place(Skill):
             onto ``p`` from this high, or from ``place_clearance`` if that is higher (a
             drawer's target asks for more: from above the drawer's cell), and the hand
             retreats as high.
+        skim: an object held from above is lowered from exactly ``lift`` (> 0), even
+            below ``place_clearance``: a drawer too high up for the hand to start
+            higher, its walls skimmed (:data:`~strug_manip.control.targets.SKIM_OVER`).
     """
 
     o: str
     p: np.ndarray
     lift: float = 0.0
+    skim: bool = False
     grasps: ClassVar[bool] = False
+
+    @classmethod
+    def onto(cls, target: PlaceTarget, o: str = "object") -> Place:
+        """The Place that puts ``o`` where ``target`` says, as it says
+        (:func:`~strug_manip.control.targets.place_targets`)."""
+        return cls(o, target.p, target.lift, target.skim)
 
     def plan(self, world: ManipulationWorld, params: SkillParams = DEFAULT_PARAMS) -> SkillPlan:
         _check_object(self.o)
@@ -552,7 +563,9 @@ class Place(Skill):
             d[2] = 0.0
             d /= np.linalg.norm(d)
         lift = _nonnegative("lift", self.lift)
-        clearance = max(params.place_clearance, lift) if top else params.insert_clearance
+        clearance = params.insert_clearance
+        if top:
+            clearance = lift if self.skim and lift > 0.0 else max(params.place_clearance, lift)
         touch = frozenset({self.o})
         above = g.copy()  # level: in at the lifted height, then down inside the cell
         if not top:

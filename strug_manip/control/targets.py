@@ -14,7 +14,8 @@ the first):
   the free motion ends above them, and only the straight, slow line down the middle
   of the box comes near them; where no base pose reaches that high, the same places
   follow lowered from ``SkillParams.place_clearance`` (the free motion then ends inside
-  the box).
+  the box), then lowered from just over the walls (:data:`SKIM_OVER`, a drawer high
+  up), then, in a deep box, let go higher up and dropped (:data:`DROPS`).
 - a **cell** (behind an open door, or an open shelf): carried in level from the front
   (``side`` grasp), resting on the cell's floor :data:`INSERT` behind the front; it
   comes in midway up the cell's free opening (up to :data:`MAX_LIFT` above its place),
@@ -70,6 +71,24 @@ MAX_LIFT = 0.15
 #: cm over the believed walls) all placed the demo's object; 0.26 m was out of the
 #: arm's reach over that 1.2 m high drawer: 5 cm, the box's error, within reach.
 ABOVE_WALLS = 0.05
+#: Where a drawer is out of the arm's reach from both heights above (a drawer 1.2 m up:
+#: the hand held 0.12 m over the place is higher than a top grasp reaches), the object
+#: is lowered from this little over the walls [m] (its bottom ``place_drop`` more):
+#: measured on two episode cabinets (generator seeds 6339 and 8186, 6 and 8 cm deep
+#: boxes with their objects' centres 1.23 and 1.24 m up) whose places were out of reach
+#: (``ik_infeasible``) from 0.12 m: 6339 placed from 2 cm over its walls, 8186 only from
+#: 0 cm (1 cm was out of reach). The walls' height is perception's, centimetres off,
+#: which is why these come last: tried only where nothing higher is reachable.
+SKIM_OVER = (0.02, 0.0)
+#: In a deep drawer, the object is let go this high above the box's floor [m] (its
+#: bottom), and drops in, where lowering it all the way is out of reach: measured on
+#: episode cabinet 9473 (generator seed; a 0.32 m deep box, its floor 0.84 m up, out
+#: 0.17 m), the forearm met the box's front wall whenever the wrist came below its top
+#: (a release 0.05 m up); released 0.10 or 0.15 m up the object landed upright inside.
+DROPS = (0.10, 0.15)
+#: A dropped object's top stays this far below the walls' top when let go [m]: it
+#: cannot tip out over them.
+DROP_BELOW_WALLS = 0.05
 
 
 @dataclass(frozen=True)
@@ -82,11 +101,14 @@ class PlaceTarget:
         lift: how much higher than ``p`` the placing motion starts [m] (Place's
             ``lift``): a level object's way in over a cell's floor, a lowered
             object's drop into a drawer from above its walls (:data:`ABOVE_WALLS`).
+        skim: a lowered object starts exactly ``lift`` above ``p``, even below
+            ``SkillParams.place_clearance`` (Place's ``skim``, :data:`SKIM_OVER`).
     """
 
     p: np.ndarray
     grasp: str
     lift: float = 0.0
+    skim: bool = False
 
 
 def _cell_place(
@@ -187,7 +209,9 @@ def place_targets(
     stay farther from the fronts and handles of the drawers above (a low drawer, out
     only 15-20 cm, leaves the hand little room in front of them). Each is lowered into
     from above the box's walls (:data:`ABOVE_WALLS`), then, where that is out of reach,
-    from ``place_clearance`` (lift 0). A cell has one.
+    from ``place_clearance`` (lift 0), then from just over the walls
+    (:data:`SKIM_OVER`); last, in a box deep enough, each is let go :data:`DROPS` above
+    the floor. A cell has one.
 
     Raises:
         UnknownNameError: no part ``link``.
@@ -221,14 +245,29 @@ def place_targets(
     near_wall = front_wall - CLEARANCE - (half[0] if along else FINGER_SPAN / 2)
     z = center[2] - size[2] / 2 + half[2]
     xs = [middle] + ([near_wall] if near_wall > middle + 1e-3 else [])
-    lifts = (float(size[2]) + ABOVE_WALLS, 0.0)  # over the walls; else as reach allows
+    walls = float(size[2])
+    over = walls + ABOVE_WALLS
+    # (raise over the resting place [m], lift over the release [m], skim) in the order
+    # to try: over the walls; else as reach allows; else skimming them; else dropped.
+    starts = [(0.0, over, False), (0.0, 0.0, False)]
+    starts += [(0.0, walls + o, True) for o in SKIM_OVER]
+    starts += [(r, over - r, False) for r in DROPS
+               if r + 2 * half[2] <= walls - DROP_BELOW_WALLS]  # fmt: skip
     return tuple(
-        _target(T, np.array([x, center[1], z]), yaw, 0.0, "top", lift) for lift in lifts for x in xs
+        _target(T, np.array([x, center[1], z + r]), yaw, 0.0, "top", lift, skim)
+        for r, lift, skim in starts
+        for x in xs
     )
 
 
 def _target(
-    T: np.ndarray, local: np.ndarray, yaw: float, pitch: float, grasp: str, lift: float
+    T: np.ndarray,
+    local: np.ndarray,
+    yaw: float,
+    pitch: float,
+    grasp: str,
+    lift: float,
+    skim: bool = False,
 ) -> PlaceTarget:
     """A :class:`PlaceTarget` from the object's centre ``local`` (3,) [m] in the cabinet
     frame ``T`` (4, 4), turned by ``yaw`` about the vertical and pitched by ``pitch``
@@ -239,4 +278,4 @@ def _target(
     R = axis_angle(np.array([0.0, 0.0, 1.0]), yaw) @ axis_angle(np.array([0.0, 1.0, 0.0]), -pitch)
     p[:3, :3] = T[:3, :3] @ R
     p[:3, 3] = T[:3, :3] @ local + T[:3, 3]
-    return PlaceTarget(p, grasp, lift)
+    return PlaceTarget(p, grasp, lift, skim)

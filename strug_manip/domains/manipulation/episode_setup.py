@@ -161,9 +161,7 @@ def _fills(world: ManipulationWorld, part, ctx: ControlContext) -> bool:
         targets = place_targets(world.scene.cabinet_spec, part.link, 0.0, T)
     except ConfigError:
         return False
-    out = first_feasible(
-        functools.partial(Place("object", t.p, t.lift).run, world, ctx=ctx) for t in targets
-    )
+    out = first_feasible(functools.partial(Place.onto(t).run, world, ctx=ctx) for t in targets)
     spec, T_now = world.scene.cabinet_spec, world.cabinet_pose()
     return bool(
         out is not None and out.ok and inside(spec, part.link, 0.0, T_now, world.object_pose())

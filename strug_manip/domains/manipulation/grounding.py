@@ -72,7 +72,7 @@ def skills(
             tgts = place_targets(w.particles[i].spec, link, q, T_now)
         except ConfigError:
             return [], None  # the part is not open enough: no pose to place at
-        return [Place("object", t.p, t.lift) for t in tgts], None
+        return [Place.onto(t) for t in tgts], None
     holder = root.rep(a) if holder is None else holder
     spec_part = w.particles[holder].spec.part(part.links[holder])
     q = w.particles[holder].q.get(spec_part.joint, 0.0)
