@@ -10,7 +10,8 @@ boxes: so the base may stand under a table top or an open flap that only the nar
 upper body must keep clear of). The
 grid path is shortened by line of sight, the heading turns evenly along it, and the
 route is kept only if the full kinematic check (the real robot geometry at every
-:data:`STEP` of it) finds it free.
+:data:`STEP` of it) finds it free; failing that, the grid is searched again with the
+start's and the goal's surroundings open (a robot walled in by the grid's growth).
 
 Units: [m], [rad]; a base pose is (x, y, yaw).
 """
@@ -55,36 +56,61 @@ def plan_route(
 ) -> list[np.ndarray] | None:
     """Base poses to drive through from ``start`` to ``goal`` (both (3,), the goal's yaw
     unwrapped to the nearest turn of the start's), the arm at ``arm``; None if none
-    is found. ``checker`` is loaded with the scene's state (and any carried object)."""
+    is found. ``checker`` is loaded with the scene's state (and any carried object).
+
+    Where the grid has no route, or its route is not free, the grid is searched again
+    with the cells within the robot's radius of the start and the goal open
+    (:func:`grid_route`'s ``escape``): the grid grows every obstacle by the robot's
+    widest reach at its heights in every direction, so a robot that stands free next
+    to an obstacle (carrying the object beside the table, or beside a door it swung
+    open) may find its own cell walled in; the full kinematic check still decides."""
     start = np.asarray(start, dtype=float)
     goal = np.asarray(goal, dtype=float).copy()
     goal[2] = start[2] + (goal[2] - start[2] + math.pi) % (2 * math.pi) - math.pi
     checker.allow()
     if route_free(checker, [start, goal], arm):
         return [goal]
-    robot = _robot_points(checker, start, arm)
+    robot = robot_points(checker, start, arm)
     lo = np.minimum(start[:2], goal[:2]) - MARGIN
     shape = np.ceil((np.maximum(start[:2], goal[:2]) + MARGIN - lo) / CELL).astype(int) + 1
-    blocked = _occupancy(checker, lo, shape, robot)
+    blocked = occupancy(checker, lo, shape, robot)
+    for escape in (0.0, float(robot[:, 0].max()) + CLEARANCE):
+        route = grid_route(blocked, lo, start, goal, escape)
+        if route is not None and route_free(checker, [start, *route], arm):
+            return route
+    return None
+
+
+def grid_route(
+    blocked: np.ndarray, lo: np.ndarray, start: np.ndarray, goal: np.ndarray, escape: float
+) -> list[np.ndarray] | None:
+    """The base poses (after ``start``) of the A* route on the grid ``blocked`` (its
+    cell (0, 0) at ``lo`` (2,)), shortened by line of sight, the heading turning evenly
+    along it; the cells within ``escape`` [m] of the start and the goal count as open
+    (their own cells always do). None if the grid has none."""
+    shape = np.array(blocked.shape)
     cell = lambda p: tuple(np.clip(np.round((p - lo) / CELL).astype(int), 0, shape - 1))  # noqa: E731
     a, b = cell(start[:2]), cell(goal[:2])
-    blocked[a] = blocked[b] = False  # the robot stands there already / will
-    path = _astar(blocked, a, b)
+    grid = blocked.copy()
+    xs = lo[0] + CELL * np.arange(shape[0])
+    ys = lo[1] + CELL * np.arange(shape[1])
+    for p in (start, goal):
+        grid &= (xs[:, None] - p[0]) ** 2 + (ys[None, :] - p[1]) ** 2 >= escape * escape
+    grid[a] = grid[b] = False  # the robot stands there already / will
+    path = _astar(grid, a, b)
     if path is None:
         return None
-    pts = [lo + CELL * np.array(c, dtype=float) for c in _shortcut(blocked, path)]
+    pts = [lo + CELL * np.array(c, dtype=float) for c in _shortcut(grid, path)]
     pts[0], pts[-1] = start[:2], goal[:2]
     lengths = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))])
     s = lengths / max(lengths[-1], 1e-9)
     route = [
         np.array([*p, start[2] + f * (goal[2] - start[2])]) for p, f in zip(pts, s, strict=True)
     ]
-    if not route_free(checker, [start, *route[1:]], arm):
-        return None
     return route[1:]
 
 
-def _robot_points(checker: ContactChecker, base: np.ndarray, arm: np.ndarray) -> np.ndarray:
+def robot_points(checker: ContactChecker, base: np.ndarray, arm: np.ndarray) -> np.ndarray:
     """The robot's geometry (and any carried object's) in posture ``arm``, as points
     (N, 3): horizontal distance from the base centre, height above the floor [m]."""
     m, d = checker.model, checker.data
@@ -120,7 +146,7 @@ def _corners(m: mujoco.MjModel, d: mujoco.MjData, g: int) -> np.ndarray:
     return local @ R.T + d.geom_xpos[g]
 
 
-def _occupancy(
+def occupancy(
     checker: ContactChecker, lo: np.ndarray, shape: np.ndarray, robot: np.ndarray
 ) -> np.ndarray:
     """Grid cells (shape) whose centre is within the robot's radius at an obstacle's
