@@ -28,6 +28,7 @@ from strug_manip.domains.manipulation.state import (
 )
 from strug_manip.experiments.episode import run_episode
 from strug_manip.objects.hypotheses import BelievedJoint, model_of
+from strug_manip.robot.fetch import GRIPPER_SITE
 from strug_manip.world.scene import cabinet_pose
 
 #: A drawers-only cabinet whose top drawer the robot opens (``tools/eval_skills.py``).
@@ -446,8 +447,6 @@ def test_a_cloud_of_an_unchanged_cabinet_is_weighed_once(drawer_episode):
 def test_particles_take_the_object_back_when_the_real_hand_still_holds_it(drawer_episode):
     """After a real step that leaves the object in the hand, a particle whose twin
     ended empty-handed gets the object into its hand, in the real grasp."""
-    from strug_manip.robot.fetch import GRIPPER_SITE
-
     d, s0, belief = drawer_episode
     rng = np.random.default_rng(0)
     try:
@@ -516,8 +515,10 @@ def test_an_action_that_failed_on_the_real_robot_is_refused_until_a_step_ends_ok
 ):
     """A real step that failed in a way that repeats itself (here a Place with nothing
     held) is refused at the root, whatever the twins say; an opening only while it
-    follows the particle it failed with; the refusals end with a step that ends ok (a
-    Pick). A collision is not refused: the next attempt plans a new path."""
+    follows the particle it failed with; a refusal stands only while the cabinet and
+    the hold are as they were when the action failed (after the Pick the hand holds the
+    object: the Place is offered again). A collision is not refused: the next attempt
+    plans a new path."""
     assert "collision" not in REPEATS_ITSELF and "grasp_lost" in REPEATS_ITSELF
     d, s0, belief = drawer_episode
     rng = np.random.default_rng(0)
@@ -542,7 +543,8 @@ def test_an_action_that_failed_on_the_real_robot_is_refused_until_a_step_ends_ok
                                   for h2, r in enumerate(row))
                             for k2, row in enumerate(old)))  # fmt: skip
         assert d.applicable(root, opening)  # another particle's joint: offered again
-        d.real.refused -= {(pick, -1), (opening, old[k][h])}
+        for key in ((pick, -1), (opening, old[k][h])):
+            d.real.refusals.pop(key, None)
         done = _real_step(d, failed.state, pick, rng)
         assert done.obs.key[1] == 1.0, done.obs.summary
         assert not d.real.refused and d.real.now == 2
@@ -554,7 +556,7 @@ def test_an_action_that_failed_on_the_real_robot_is_refused_until_a_step_ends_ok
         _with_reps(d, old)
         d.real.world.restore(s0.sim)
         d.real.weighed = b""
-        d.real.refused.clear()
+        d.real.refusals.clear()
         d.real.now = 0
         d.environment.condition(belief)
 
@@ -657,7 +659,7 @@ def _undo_real_steps(d, s0, belief, n0: int) -> None:
     del d.real.outcomes[n0:], d.real.labels[n0:]
     d.real.world.restore(s0.sim)
     d.real.weighed = b""
-    d.real.refused.clear()
+    d.real.refusals.clear()
     d.real.now, d.real.still = 0, False
     d.environment.condition(belief)
 
@@ -782,13 +784,18 @@ def test_a_believed_knob_is_built_as_a_knob_and_grasped_pitched():
         PartModel("door", rect, axis, np.zeros(3), "bottom", 1.4, handle="hook")
 
 
-def test_an_action_without_a_motion_plan_twice_in_a_row_is_refused():
+def test_an_action_without_a_motion_plan_twice_in_a_row_is_refused(world):
     """``no_motion_plan`` is tried again (another planner seed) but not a third time;
-    a collision never refuses; a step that ends ok lifts every refusal."""
-    from strug_manip.domains.manipulation.real import NO_PLAN_TRIES, RealEpisode
+    a collision never refuses; a step that ends ok restarts the count but lifts no
+    refusal: a refusal stands while the cabinet (every coordinate within UNCHANGED)
+    and the hold are as they were when the action failed (a Place that could not
+    start came back after each Place(table) and Pick, which move nothing of the
+    cabinet), and stands again when they are back."""
+    from strug_manip.domains.manipulation.real import NO_PLAN_TRIES, UNCHANGED, RealEpisode
 
     assert NO_PLAN_TRIES == 2
-    real = RealEpisode(None, 0, "link_1", np.zeros(3), [], [])
+    world.reset()
+    real = RealEpisode(world, 0, "link_1", np.zeros(3), [], [])
     place, pick = (ManipAction("Place", 0), -1), (ManipAction("Pick", grasp="top"), -1)
     real.settle(place, "no_motion_plan")
     assert not real.refused
@@ -800,6 +807,17 @@ def test_an_action_without_a_motion_plan_twice_in_a_row_is_refused():
     real.settle(pick, "grasp_lost")
     assert real.refused == {place, pick}
     real.settle(pick, "ok")
-    assert not real.refused and not real.unplanned
+    assert real.refused == {place, pick} and not real.unplanned  # nothing changed
+    joint = next(iter(world.part_positions()))
+    world.set_parts({joint: 0.5 * UNCHANGED})  # a drift: the same cabinet
+    assert real.refused == {place, pick}
+    world.set_parts({joint: 3 * UNCHANGED})  # a part moved: another cabinet
+    assert not real.refused
+    world.reset()
+    assert real.refused == {place, pick}  # back as it was
+    world.set_object_pose(world.site_pose(GRIPPER_SITE))  # the hand holds the object
+    assert not real.refused
+    world.reset()
+    real.refusals.clear()
     real.settle(place, "no_motion_plan")
     assert not real.refused  # counted afresh after the ok

@@ -305,8 +305,9 @@ class ManipulationPOMDP(GenerativePOMDP):
 
         At the root (the states of the current real step, :attr:`.catalogue.Root.now`),
         an action the real robot refuses (:attr:`.catalogue.Root.refused`: it failed on
-        the full robot in a way that repeats itself since the last step that ended
-        ``ok``, :meth:`.real.RealEpisode.settle`) is refused whatever the twins say, as
+        the full robot in a way that repeats itself, and the cabinet and the hold are
+        still as they were then, :attr:`.real.RealEpisode.refused`) is refused whatever
+        the twins say, as
         long as it would follow the same particle's grasp and joint: the robot would
         plan it against the same model in nearly the same state and fail the same way
         again. The twins and the full robot disagree on such actions, and when every

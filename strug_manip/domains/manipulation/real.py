@@ -78,6 +78,15 @@ NO_PLAN_TRIES = 2
 #: believes a neighbouring door ajar finds the approach to the target blocked).
 #: Planning is cheap next to a step; three bounds what a step may spend on it.
 REAL_PLAN_MODELS = 3
+#: A refusal stands while every coordinate of the cabinet (its base's and its parts')
+#: is within this of where it was when the action failed [m or rad], and the hand
+#: holds what it held then: what failed against that cabinet fails again. Until
+#: issue 37 any step that ended ``ok`` lifted every refusal, and a Place that could not
+#: start (``ik_infeasible`` into a door's cell the belief has narrower than it is)
+#: came back after each ``Place(table)`` / ``Pick``, which move nothing of the cabinet:
+#: 8 of STRUG's 16 OpenDoor failures on held-out 9300:9330 spent their last steps in
+#: that cycle. A centimetre is more than a part drifts while the robot works elsewhere.
+UNCHANGED = 0.01
 
 
 @dataclass
@@ -96,12 +105,13 @@ class RealEpisode:
             ``Place(table)`` for the Place back onto the table, else the skill).
         weighed: the cabinet's joints (to the mm, as bytes) when the belief last
             weighed a cloud (``ManipObservation.news``); empty before the first.
-        refused: the actions that failed on the full robot in a way that repeats
+        refusals: the actions that failed on the full robot in a way that repeats
             itself (:data:`~.rules.REPEATS_ITSELF`, or ``no_motion_plan``
-            :data:`NO_PLAN_TRIES` times in a row) since its last step that ended
-            ``ok``, each with the particle it followed (:meth:`.catalogue.Root.rep`);
-            the twins' POMDP refuses them at the root while that particle is still
-            their representative.
+            :data:`NO_PLAN_TRIES` times in a row), each with the particle it followed
+            (:meth:`.catalogue.Root.rep`), and the cabinet's coordinates (rounded, as
+            :meth:`~strug_manip.world.sim.ManipulationWorld.cabinet_key`) and whether
+            the hand held the object when it failed; :attr:`refused` those that stand
+            now.
         unplanned: per such (action, particle), its ``no_motion_plan`` stops since the
             last step that ended ``ok``.
         now: the step count of the states after the last real step (the root's).
@@ -120,26 +130,41 @@ class RealEpisode:
     outcomes: list[Outcome]
     labels: list[str] = field(default_factory=list)
     weighed: bytes = b""
-    refused: set[tuple[ManipAction, int]] = field(default_factory=set)
+    refusals: dict[tuple[ManipAction, int], tuple[np.ndarray, bool]] = field(default_factory=dict)
     unplanned: collections.Counter = field(default_factory=collections.Counter)
     now: int = 0
     still: bool = False
     handles: dict[str, np.ndarray] = field(default_factory=dict)
 
+    @property
+    def refused(self) -> set[tuple[ManipAction, int]]:
+        """The refusals that stand now: the cabinet within :data:`UNCHANGED` of where
+        it was when the action failed, the hand holding what it held; the twins' POMDP
+        refuses them at the root while the particle each followed is still their
+        representative."""
+        q, held = self._situation()
+        return {key for key, (q0, held0) in self.refusals.items()
+                if held0 == held and np.max(np.abs(q - q0), initial=0.0) <= UNCHANGED}  # fmt: skip
+
+    def _situation(self) -> tuple[np.ndarray, bool]:
+        """The cabinet's coordinates (to the mm and mrad) and whether the hand holds the
+        object."""
+        return np.frombuffer(self.world.cabinet_key()), holds_object(self.world)
+
     def settle(self, key: tuple[ManipAction, int], status: str) -> None:
         """The refusals after a real step of ``key`` (action, the particle it
-        followed) that ended ``status``: all lifted by ``ok``; ``key`` refused after a
-        failure that repeats itself (:data:`~.rules.REPEATS_ITSELF`) or after
-        :data:`NO_PLAN_TRIES` ``no_motion_plan`` stops in a row."""
+        followed) that ended ``status``: ``key`` refused in the situation it leaves
+        after a failure that repeats itself (:data:`~.rules.REPEATS_ITSELF`) or after
+        :data:`NO_PLAN_TRIES` ``no_motion_plan`` stops in a row (counted since the last
+        step that ended ``ok``)."""
         if status == str(Status.OK):
-            self.refused.clear()
             self.unplanned.clear()
         elif status in REPEATS_ITSELF:
-            self.refused.add(key)
+            self.refusals[key] = self._situation()
         elif status == str(Status.NO_MOTION_PLAN):
             self.unplanned[key] += 1
             if self.unplanned[key] >= NO_PLAN_TRIES:
-                self.refused.add(key)
+                self.refusals[key] = self._situation()
 
 
 class RealEnvironment:
