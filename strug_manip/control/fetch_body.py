@@ -13,8 +13,9 @@ MuJoCo physics stepping all along (:class:`~strug_manip.control.driver.JointDriv
    placement for which they plan (stow, route, reach);
 2. **drive** (if the base must move): the arm goes to its tuck first (no driving with
    the arm out; carrying the object, to its carry posture), the base follows a
-   collision-checked route (straight, else around the obstacles on a floor grid), the
-   torso rising on the way;
+   collision-checked route (straight, else around the obstacles on a floor grid;
+   turning in place at its ends where turning on the way would touch), the torso
+   rising on the way;
 3. **reach**: an OMPL motion to the pre-grasp (the straight joint-space line where it
    is free; carrying an object, it moves with the gripper in the checks);
 4. **phases**: each line followed (its IK path, the base along where it is a whole-body

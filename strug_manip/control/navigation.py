@@ -13,6 +13,18 @@ route is kept only if the full kinematic check (the real robot geometry at every
 :data:`STEP` of it) finds it free; failing that, the grid is searched again with the
 start's and the goal's surroundings open (a robot walled in by the grid's growth).
 
+A robot that turns while it drives past an obstacle (the door it swung open, the
+table) sweeps a corner of its arm into it where driving at a fixed heading would not.
+So where no evenly-turning route is free, each of those paths (the straight segment,
+the grid's) is tried again with the robot turning only where it stands: in place at
+the start to one heading, driving the whole path at it, in place at the goal to the
+goal's heading (the driver takes a waypoint of the same x, y and another yaw as a
+turn in place). The headings tried (:func:`turn_headings`, every :data:`TURN`) are
+those it has room to turn to at the start and from which it has room to turn to the
+goal's heading at the goal; of those whose route the full check finds free, the one
+with free headings on both sides (:data:`HEADING_ROOM`: the least turning free
+heading grazes what it passes), then the least turning.
+
 Units: [m], [rad]; a base pose is (x, y, yaw).
 """
 
@@ -37,6 +49,10 @@ STEP = 0.05
 CLEARANCE = 0.03
 #: Height above which geometry cannot touch the robot [m].
 ROBOT_HEIGHT = 1.6
+#: Spacing of the full collision checks along a turn, and of the headings tried [rad].
+TURN = 0.1
+#: Free headings wanted on either side of the one a route turning in place drives at [rad].
+HEADING_ROOM = 0.3
 
 
 def route_free(checker: ContactChecker, route: list[np.ndarray], arm: np.ndarray) -> bool:
@@ -44,7 +60,7 @@ def route_free(checker: ContactChecker, route: list[np.ndarray], arm: np.ndarray
     base poses ``route`` (checked every :data:`STEP` of travel, yaw interpolated)."""
     for a, b in itertools.pairwise(route):
         n = max(1, math.ceil(float(np.linalg.norm(b[:2] - a[:2])) / STEP))
-        n = max(n, math.ceil(abs(float(b[2] - a[2])) / 0.1))  # turns: every 0.1 rad
+        n = max(n, math.ceil(abs(float(b[2] - a[2])) / TURN))  # turns: every TURN
         for k in range(n + 1):
             if not checker.free(np.concatenate([a + (k / n) * (b - a), arm])):
                 return False
@@ -63,7 +79,9 @@ def plan_route(
     (:func:`grid_route`'s ``escape``): the grid grows every obstacle by the robot's
     widest reach at its heights in every direction, so a robot that stands free next
     to an obstacle (carrying the object beside the table, or beside a door it swung
-    open) may find its own cell walled in; the full kinematic check still decides."""
+    open) may find its own cell walled in; the full kinematic check still decides.
+    Where no evenly-turning route is free, the same paths are tried turning in place
+    at their ends only (:func:`turning_in_place`)."""
     start = np.asarray(start, dtype=float)
     goal = np.asarray(goal, dtype=float).copy()
     goal[2] = start[2] + (goal[2] - start[2] + math.pi) % (2 * math.pi) - math.pi
@@ -74,11 +92,97 @@ def plan_route(
     lo = np.minimum(start[:2], goal[:2]) - MARGIN
     shape = np.ceil((np.maximum(start[:2], goal[:2]) + MARGIN - lo) / CELL).astype(int) + 1
     blocked = occupancy(checker, lo, shape, robot)
+    paths = [[start[:2], goal[:2]]]  # the straight segment, then the grid's paths
     for escape in (0.0, float(robot[:, 0].max()) + CLEARANCE):
         route = grid_route(blocked, lo, start, goal, escape)
-        if route is not None and route_free(checker, [start, *route], arm):
+        if route is None:
+            continue
+        if route_free(checker, [start, *route], arm):
+            return route
+        paths.append([start[:2], *[p[:2] for p in route]])
+    # (Only now: where an evenly-turning route is free, it stays the route.)
+    headings = turn_headings(checker, start, goal, arm)
+    for path in paths:
+        route = turning_in_place(checker, path, start, goal, arm, headings)
+        if route is not None:
             return route
     return None
+
+
+def turn_headings(
+    checker: ContactChecker, start: np.ndarray, goal: np.ndarray, arm: np.ndarray
+) -> np.ndarray:
+    """The headings [rad] (ascending, every :data:`TURN` from the start's yaw) the
+    robot can turn to in place at ``start`` and from which it can turn in place to the
+    goal's yaw at ``goal`` (:func:`turn_room`, within half a turn beyond either yaw)."""
+    span = (min(start[2], goal[2]) - math.pi, max(start[2], goal[2]) + math.pi)
+    a0, a1 = turn_room(checker, start, arm, span)
+    b0, b1 = turn_room(checker, goal, arm, span)
+    # (1e-9: the start's room ends on this grid of headings, but for rounding.)
+    k0 = math.ceil((max(a0, b0) - start[2]) / TURN - 1e-9)
+    k1 = math.floor((min(a1, b1) - start[2]) / TURN + 1e-9)
+    return start[2] + TURN * np.arange(k0, k1 + 1)
+
+
+def turning_in_place(
+    checker: ContactChecker,
+    path: list[np.ndarray],
+    start: np.ndarray,
+    goal: np.ndarray,
+    arm: np.ndarray,
+    headings: np.ndarray,
+) -> list[np.ndarray] | None:
+    """The route (the base poses after ``start``) along ``path`` (points (2,) [m], from
+    the start's to the goal's) at one of ``headings`` (ascending, every :data:`TURN`
+    [rad]): turning in place at the start to it, driving the whole path at it, turning
+    in place at the goal to the goal's yaw. Of the headings whose route is free, the
+    one with the most free headings on its tighter side (up to :data:`HEADING_ROOM`),
+    then the least turning; None if none is free."""
+
+    def route(h: float) -> list[np.ndarray]:
+        poses = [np.array([*p, h]) for p in path] + [goal]
+        # A turn of zero is no waypoint (the driver would stand still for it).
+        return [b for a, b in itertools.pairwise([start, *poses]) if not np.allclose(a, b)]
+
+    free = np.array([route_free(checker, [start, *route(h)], arm) for h in headings], bool)
+    if not free.any():
+        return None
+    # The least turning heading that is free borders on one that is not: the arm
+    # would graze what it passes, at the resolution of the check, and the base lags
+    # its command by a centimetre or so. So room first.
+    room = np.minimum(_run(free), _run(free[::-1])[::-1])
+    want = round(HEADING_ROOM / TURN)
+    turning = np.abs(headings - start[2]) + np.abs(goal[2] - headings)
+    best = min(np.flatnonzero(free), key=lambda i: (-min(room[i], want), turning[i]))
+    return route(float(headings[best]))
+
+
+def _run(free: np.ndarray) -> np.ndarray:
+    """For each entry of ``free`` (n,), how many entries right before it are free (the
+    first's: none; beyond the ends of the headings the robot cannot turn)."""
+    out = np.zeros(len(free), dtype=int)
+    for i in range(1, len(free)):
+        out[i] = out[i - 1] + 1 if free[i - 1] else 0
+    return out
+
+
+def turn_room(
+    checker: ContactChecker, pose: np.ndarray, arm: np.ndarray, span: tuple[float, float]
+) -> tuple[float, float]:
+    """The yaws [rad] (lowest, highest) within ``span`` to which the robot standing at
+    ``pose`` (3,) with the arm at ``arm`` turns in place from its yaw touching nothing
+    (checked every :data:`TURN`); (yaw, yaw) if it cannot turn either way."""
+    x, y, yaw = pose
+    ends = []
+    for sign, limit in ((-1.0, span[0]), (1.0, span[1])):
+        end = yaw
+        while sign * (limit - end) > 0.0:
+            nxt = end + sign * min(TURN, sign * (limit - end))
+            if not checker.free(np.concatenate([[x, y, nxt], arm])):
+                break
+            end = nxt
+        ends.append(end)
+    return ends[0], ends[1]
 
 
 def grid_route(
