@@ -269,9 +269,10 @@ def find_placement(
         plan: the skill's gripper motions.
         ik: the arm's IK (torso + arm); wb_ik: the whole-body IK (base + torso + arm).
         robot_base: the base's pose now (x, y, yaw).
-        postures: torso + arm (8,) as the robot drives (the base pose must be free
-            with it) and where its reach to the pre-grasp starts (the IK starts there
-            too, and the reach's time counts).
+        postures: torso + arm (8,) as the robot drives (the tuck) and where its
+            reach to the pre-grasp starts (the posture it arrives in; the IK starts
+            there too, and the reach's time counts): the base pose must be free with
+            either.
         speeds: the speed limits of torso + arm (8,) and of the base (3,), which time
             the reach and the lines (:func:`line_seconds`).
         checker: contacts in the planning world over base + torso + arm, loaded with
@@ -385,7 +386,9 @@ def _try(
     base_q = dict(zip(BASE_JOINTS, base.tolist(), strict=True))
     if checker is not None:
         checker.allow()
-        if not checker.free(np.concatenate([base, drive_q])):
+        # The robot arrives in the reach's start (carrying, its carry posture, which
+        # reaches where the tuck does not: into a drawer it opened, held-out 9306).
+        if not all(checker.free(np.concatenate([base, q])) for q in (drive_q, reach_q)):
             return "base blocked", None
     solutions = []
     for seed in (warm,) if warm is not None else (reach_q, None):
