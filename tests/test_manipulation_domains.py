@@ -18,7 +18,8 @@ from strug_manip.domains import MANIPULATION_DOMAINS, make_domain
 from strug_manip.domains.manipulation import episode_setup
 from strug_manip.domains.manipulation.actions import SAME_PART, TABLE, ManipAction, part_kind
 from strug_manip.domains.manipulation.catalogue import representatives
-from strug_manip.domains.manipulation.grounding import handle_point
+from strug_manip.domains.manipulation.grounding import MOVED, cabinet_frame, handle_point
+from strug_manip.domains.manipulation.health import status_of
 from strug_manip.domains.manipulation.real import REAL_PLAN_MODELS
 from strug_manip.domains.manipulation.rules import BEFORE_MOTION, REPEATS_ITSELF
 from strug_manip.domains.manipulation.state import (
@@ -221,6 +222,43 @@ def test_the_belief_takes_over_what_the_robot_knows_after_a_real_step(drawer_epi
                            atol=1e-6)  # fmt: skip
         assert np.allclose(tw.robot_base[:2], [d.real.world.robot_qpos()[j] for j in
                                                ("base_x_joint", "base_y_joint")])  # fmt: skip
+
+
+def test_an_opening_grasps_where_the_dragged_cabinet_stands(drawer_episode):
+    """Once the real cabinet has been dragged (and every particle's cabinet with it),
+    an opening's grasp and joint move with the cabinet, so it can still start; a
+    cabinet that settled by less than ``MOVED`` keeps the model's own frame."""
+    d, _, belief = drawer_episode
+    rw = d.real.world
+    T0 = rw.cabinet_pose()
+    a = next(ManipAction("OpenDrawer", k, h) for k, part in enumerate(d.parts)
+             for h, kind in enumerate(part.hypotheses) if kind == "drawer")  # fmt: skip
+    rep = d.root.rep(a)
+    before = d.skills(rep, a, d.worlds.initial[rep])[0][0]
+    shift = np.eye(4)
+    shift[:3, 3] = [0.04, -0.03, 0.0]  # the real cabinet dragged 5 cm
+    try:
+        rw.set_cabinet_pose(shift @ T0)
+        later = [dataclasses.replace(s, t=1) for s in belief.states]  # after a real step
+        conditioned = d.environment.condition(type(belief)(later, belief.weights, belief.origin))
+        assert d.root.rep(a) == rep
+        s = next(s for s in conditioned.states if s.origin == rep)
+        after = d.skills(rep, a, s.sim)[0][0]
+        moved = rw.cabinet_pose() @ np.linalg.inv(rw.scene.T_world_cabinet)
+        np.testing.assert_allclose(after.g, moved @ before.g, atol=1e-6)
+        origin = moved @ np.r_[before.joint.origin, 1.0]
+        np.testing.assert_allclose(after.joint.origin, origin[:3], atol=1e-6)
+        assert d.applicable(s, a)
+        assert status_of(d.step(s, a, np.random.default_rng(0)).state.key) != "not_applicable"
+    finally:
+        rw.set_cabinet_pose(T0)
+        d.environment.condition(belief)
+    T_reset = np.eye(4)
+    T_now = T_reset.copy()
+    T_now[:3, 3] = [MOVED / 2, 0.0, 0.0]
+    assert cabinet_frame(T_now, T_reset) is T_reset
+    T_now[:3, 3] = [0.0, 2 * MOVED, 0.0]
+    assert cabinet_frame(T_now, T_reset) is T_now
 
 
 def test_a_part_the_real_robot_sees_shut_is_shut_in_every_particle(shut_episode):

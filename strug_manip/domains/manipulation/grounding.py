@@ -26,6 +26,7 @@ from strug_manip.domains.manipulation.actions import TABLE, ManipAction, part_po
 from strug_manip.domains.manipulation.catalogue import Catalogue, Root
 from strug_manip.domains.manipulation.rules import dragged, inside
 from strug_manip.domains.manipulation.worlds import ParticleWorlds
+from strug_manip.geometry import rotation_angle
 from strug_manip.objects.generator import CabinetSpec
 from strug_manip.objects.hypotheses import BelievedJoint
 from strug_manip.world.sim import ManipulationWorld, WorldState
@@ -34,6 +35,13 @@ from strug_manip.world.sim import ManipulationWorld, WorldState
 #: down to it [m]: the object held level clears the table top (a top grasp comes down
 #: from above anyway).
 TABLE_LIFT = 0.03
+#: A cabinet counts as moved, for grounding a grasp, past this shift [m] (or turn
+#: [rad]): it settles by fractions of a millimetre on its stand in every simulation,
+#: which moves no grasp (the model's own frame then serves, and the same actions
+#: simulate the same), while a drag of a few centimetres leaves a grasp at the
+#: model's old handle in empty space. A centimetre is what :data:`.real.UNCHANGED`
+#: calls a change.
+MOVED = 0.01
 
 
 def skills(
@@ -76,15 +84,28 @@ def skills(
     holder = root.rep(a) if holder is None else holder
     spec_part = w.particles[holder].spec.part(part.links[holder])
     q = w.particles[holder].q.get(spec_part.joint, 0.0)
-    T = w.pose(holder)
-    grasps = handle_grasps(spec_part, q, T)
     plan_world = w.fetch(holder, root.best.get(holder))
+    T = cabinet_frame(plan_world.cabinet_pose(), w.pose(holder))
+    grasps = handle_grasps(spec_part, q, T)
     if a.skill in ("OpenDrawer", "OpenDoor"):
         joint = BelievedJoint.of_part(spec_part, q, T)
         cls = OpenDrawer if a.skill == "OpenDrawer" else OpenDoor
         return [cls(g, joint) for g in grasps], plan_world
     probe = {"Push": Push, "PullV": PullV, "PullH": PullH}[a.skill]
     return [probe(g) for g in grasps], plan_world
+
+
+def cabinet_frame(T_now: np.ndarray, T_reset: np.ndarray) -> np.ndarray:
+    """The cabinet frame an opening's or a probe's grasps and joint are grounded in,
+    (4, 4): the model's frame at its reset ``T_reset``, or, once the cabinet has moved
+    from there by more than :data:`MOVED` (a drag the conditioning passed on to every
+    particle, :mod:`.conditioning`), where it stands now, ``T_now``. The grasp is at
+    the model's handle with its part closed; without this, every opening of a cabinet
+    the robot had slid 5 cm aimed at empty space and was ``not_applicable`` to the
+    end (OpenDoor episode 9328)."""
+    shift = float(np.linalg.norm(T_now[:3, 3] - T_reset[:3, 3]))
+    turn = rotation_angle(T_reset[:3, :3].T @ T_now[:3, :3])
+    return T_reset if max(shift, turn) <= MOVED else T_now
 
 
 def handle_point(

@@ -298,10 +298,10 @@ class ManipulationPOMDP(GenerativePOMDP):
           in (no placement pose);
         * an opening or probe on a part whose handle has moved more than
           ``HANDLE_RADIUS`` (:mod:`strug_manip.control.skills`) in ``s`` from where
-          the model put it: the action's grasps are at the model's initial handle
-          (:func:`.grounding.skills`), so there is nothing to grasp there (the part is
-          open). A part ``s``'s model lacks stays applicable: acting on it is how the
-          robot learns that the model is wrong.
+          the model put it: the action's grasps are at the model's initial handle,
+          with the cabinet where it stands (:func:`.grounding.skills`), so there is
+          nothing to grasp there (the part is open). A part ``s``'s model lacks stays
+          applicable: acting on it is how the robot learns that the model is wrong.
 
         At the root (the states of the current real step, :attr:`.catalogue.Root.now`),
         an action the real robot refuses (:attr:`.catalogue.Root.refused`: it failed on
