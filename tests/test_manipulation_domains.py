@@ -18,10 +18,10 @@ from strug_manip.domains import MANIPULATION_DOMAINS, make_domain
 from strug_manip.domains.manipulation import episode_setup
 from strug_manip.domains.manipulation.actions import SAME_PART, TABLE, ManipAction, part_kind
 from strug_manip.domains.manipulation.catalogue import representatives
-from strug_manip.domains.manipulation.grounding import MOVED, cabinet_frame, handle_point
+from strug_manip.domains.manipulation.grounding import cabinet_frame, handle_point
 from strug_manip.domains.manipulation.health import status_of
 from strug_manip.domains.manipulation.real import REAL_PLAN_MODELS
-from strug_manip.domains.manipulation.rules import BEFORE_MOTION, REPEATS_ITSELF
+from strug_manip.domains.manipulation.rules import BEFORE_MOTION, REPEATS_ITSELF, UNCHANGED
 from strug_manip.domains.manipulation.state import (
     ManipObservation,
     ManipState,
@@ -227,7 +227,7 @@ def test_the_belief_takes_over_what_the_robot_knows_after_a_real_step(drawer_epi
 def test_an_opening_grasps_where_the_dragged_cabinet_stands(drawer_episode):
     """Once the real cabinet has been dragged (and every particle's cabinet with it),
     an opening's grasp and joint move with the cabinet, so it can still start; a
-    cabinet that settled by less than ``MOVED`` keeps the model's own frame."""
+    cabinet that settled by less than ``UNCHANGED`` keeps the model's own frame."""
     d, s0, belief = drawer_episode
     rw = d.real.world
     before_test = rw.snapshot()
@@ -262,9 +262,9 @@ def test_an_opening_grasps_where_the_dragged_cabinet_stands(drawer_episode):
         d.environment.condition(belief)
     T_reset = np.eye(4)
     T_now = T_reset.copy()
-    T_now[:3, 3] = [MOVED / 2, 0.0, 0.0]
+    T_now[:3, 3] = [UNCHANGED / 2, 0.0, 0.0]
     assert cabinet_frame(T_now, T_reset) is T_reset
-    T_now[:3, 3] = [0.0, 2 * MOVED, 0.0]
+    T_now[:3, 3] = [0.0, 2 * UNCHANGED, 0.0]
     assert cabinet_frame(T_now, T_reset) is T_now
 
 
@@ -836,7 +836,7 @@ def test_an_action_without_a_motion_plan_twice_in_a_row_is_refused(world):
     and the hold are as they were when the action failed (a Place that could not
     start came back after each Place(table) and Pick, which move nothing of the
     cabinet), and stands again when they are back."""
-    from strug_manip.domains.manipulation.real import NO_PLAN_TRIES, UNCHANGED, RealEpisode
+    from strug_manip.domains.manipulation.real import NO_PLAN_TRIES, RealEpisode
 
     assert NO_PLAN_TRIES == 2
     world.reset()

@@ -388,7 +388,9 @@ def _try(
         checker.allow()
         # The robot arrives in the reach's start (carrying, its carry posture, which
         # reaches where the tuck does not: into a drawer it opened, held-out 9306).
-        if not all(checker.free(np.concatenate([base, q])) for q in (drive_q, reach_q)):
+        # (Tucked, the two are one posture: checked once.)
+        arrive = (drive_q,) if np.array_equal(drive_q, reach_q) else (drive_q, reach_q)
+        if not all(checker.free(np.concatenate([base, q])) for q in arrive):
             return "base blocked", None
     solutions = []
     for seed in (warm,) if warm is not None else (reach_q, None):

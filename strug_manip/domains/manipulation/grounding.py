@@ -24,7 +24,7 @@ from strug_manip.control import (
 )
 from strug_manip.domains.manipulation.actions import TABLE, ManipAction, part_point
 from strug_manip.domains.manipulation.catalogue import Catalogue, Root
-from strug_manip.domains.manipulation.rules import dragged, inside
+from strug_manip.domains.manipulation.rules import UNCHANGED, dragged, inside
 from strug_manip.domains.manipulation.worlds import ParticleWorlds
 from strug_manip.geometry import rotation_angle
 from strug_manip.objects.generator import CabinetSpec
@@ -35,13 +35,6 @@ from strug_manip.world.sim import ManipulationWorld, WorldState
 #: down to it [m]: the object held level clears the table top (a top grasp comes down
 #: from above anyway).
 TABLE_LIFT = 0.03
-#: A cabinet counts as moved, for grounding a grasp, past this shift [m] (or turn
-#: [rad]): it settles by fractions of a millimetre on its stand in every simulation,
-#: which moves no grasp (the model's own frame then serves, and the same actions
-#: simulate the same), while a drag of a few centimetres leaves a grasp at the
-#: model's old handle in empty space. A centimetre is what :data:`.real.UNCHANGED`
-#: calls a change.
-MOVED = 0.01
 
 
 def skills(
@@ -98,14 +91,16 @@ def skills(
 def cabinet_frame(T_now: np.ndarray, T_reset: np.ndarray) -> np.ndarray:
     """The cabinet frame an opening's or a probe's grasps and joint are grounded in,
     (4, 4): the model's frame at its reset ``T_reset``, or, once the cabinet has moved
-    from there by more than :data:`MOVED` (a drag the conditioning passed on to every
-    particle, :mod:`.conditioning`), where it stands now, ``T_now``. The grasp is at
+    from there by more than :data:`~.rules.UNCHANGED` (a drag the conditioning passed
+    on to every particle, :mod:`.conditioning`), where it stands now, ``T_now``: a
+    cabinet that settled by fractions of a millimetre keeps the model's frame, and the
+    same actions simulate the same. The grasp is at
     the model's handle with its part closed; without this, every opening of a cabinet
     the robot had slid 5 cm aimed at empty space and was ``not_applicable`` to the
     end (OpenDoor episode 9328)."""
     shift = float(np.linalg.norm(T_now[:3, 3] - T_reset[:3, 3]))
     turn = rotation_angle(T_reset[:3, :3].T @ T_now[:3, :3])
-    return T_reset if max(shift, turn) <= MOVED else T_now
+    return T_reset if max(shift, turn) <= UNCHANGED else T_now
 
 
 def handle_point(

@@ -50,6 +50,7 @@ from strug_manip.domains.manipulation.rules import (
     BEFORE_MOTION,
     CANNOT_START,
     REPEATS_ITSELF,
+    UNCHANGED,
 )
 from strug_manip.domains.manipulation.state import (
     NOT_APPLICABLE,
@@ -78,15 +79,6 @@ NO_PLAN_TRIES = 2
 #: believes a neighbouring door ajar finds the approach to the target blocked).
 #: Planning is cheap next to a step; three bounds what a step may spend on it.
 REAL_PLAN_MODELS = 3
-#: A refusal stands while every coordinate of the cabinet (its base's and its parts')
-#: is within this of where it was when the action failed [m or rad], and the hand
-#: holds what it held then: what failed against that cabinet fails again. Until
-#: issue 37 any step that ended ``ok`` lifted every refusal, and a Place that could not
-#: start (``ik_infeasible`` into a door's cell the belief has narrower than it is)
-#: came back after each ``Place(table)`` / ``Pick``, which move nothing of the cabinet:
-#: 8 of STRUG's 16 OpenDoor failures on held-out 9300:9330 spent their last steps in
-#: that cycle. A centimetre is more than a part drifts while the robot works elsewhere.
-UNCHANGED = 0.01
 
 
 @dataclass
@@ -138,10 +130,14 @@ class RealEpisode:
 
     @property
     def refused(self) -> set[tuple[ManipAction, int]]:
-        """The refusals that stand now: the cabinet within :data:`UNCHANGED` of where
-        it was when the action failed, the hand holding what it held; the twins' POMDP
-        refuses them at the root while the particle each followed is still their
-        representative."""
+        """The refusals that stand now: the cabinet within
+        :data:`~.rules.UNCHANGED` of where it was when the action failed, the hand
+        holding what it held (what failed against that cabinet fails again); the twins'
+        POMDP refuses them at the root while the particle each followed is still their
+        representative. Until issue 37 any step that ended ``ok`` lifted every refusal,
+        and a Place that could not start came back after each ``Place(table)`` /
+        ``Pick``, which move nothing of the cabinet: 8 of STRUG's 16 OpenDoor failures
+        on held-out 9300:9330 spent their last steps in that cycle."""
         q, held = self._situation()
         return {key for key, (q0, held0) in self.refusals.items()
                 if held0 == held and np.max(np.abs(q - q0), initial=0.0) <= UNCHANGED}  # fmt: skip

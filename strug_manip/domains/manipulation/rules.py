@@ -34,6 +34,12 @@ CANNOT_START = (str(Status.IK_INFEASIBLE), NOT_APPLICABLE)
 #: cabinet (again, the slides add up to a drag). A ``collision`` or a missing motion
 #: plan is not among them: the next attempt plans a new path.
 REPEATS_ITSELF = (*CANNOT_START, str(Status.GRASP_LOST), str(Status.CABINET_MOVED))
+#: The cabinet counts as changed past this, in any coordinate [m or rad] (its base's
+#: pose, its parts'): more than a part drifts while the robot works elsewhere, or a
+#: cabinet settles on its stand in a simulation (fractions of a millimetre). A refusal
+#: stands while the cabinet is unchanged (:attr:`.real.RealEpisode.refused`), and an
+#: opening's grasps follow a cabinet that has moved (:func:`.grounding.cabinet_frame`).
+UNCHANGED = 0.01
 #: The outcomes the full robot reaches before anything moves: every IK solution, route
 #: and arm motion of a skill (the stow after it included) is found before it moves, in
 #: the model it plans against (:meth:`.real.RealEnvironment.plan_models`), not in the
