@@ -69,6 +69,10 @@ class ViewParts:
         points: (h, w, 3) world points of every pixel [m]; valid: (h, w) bool;
             normals: (h, w, 3) their unit surface normals (zero where unknown).
         seconds: wall time of the network and the extraction [s].
+        texture: (h, w) the RGB image's luminance gradient magnitude (3x3 Sobel, 0-255
+            grey levels per pixel), the largest over each pixel's stride x stride
+            block: wood grain and a framed front's rails show, a flat colour does not
+            (:func:`perception.joint_cues.reads_as_furniture`); None if not computed.
     """
 
     T_world_camera: np.ndarray
@@ -83,6 +87,7 @@ class ViewParts:
     valid: np.ndarray
     normals: np.ndarray
     seconds: float
+    texture: np.ndarray | None = None
 
     @property
     def sees_cabinet(self) -> bool:

@@ -152,6 +152,16 @@ class Perceiver:
         return extract(view, self.network_output(view), self.stride, t0)
 
 
+def texture_map(rgb: np.ndarray, stride: int, shape: tuple[int, int]) -> np.ndarray:
+    """(h, w) = ``shape``: the (H, W, 3) uint8 image's luminance gradient magnitude
+    (3x3 Sobel, grey levels), the largest over each pixel's ``stride`` x ``stride``
+    block (a max, so that a one-pixel grain line survives the network's resolution)."""
+    g = cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY).astype(np.float32)
+    mag = np.hypot(cv2.Sobel(g, cv2.CV_32F, 1, 0, ksize=3), cv2.Sobel(g, cv2.CV_32F, 0, 1, ksize=3))
+    h, w = shape
+    return mag[: h * stride, : w * stride].reshape(h, stride, w, stride).max(axis=(1, 3))
+
+
 def extract(view: View, out: np.ndarray, stride: int = 2, t0: float | None = None) -> ViewParts:
     """Instances and world points of one view from a network output (N_OUT, h, w),
     with this view's joint-type cues (:func:`perception.joint_cues.apply_joint_cues`)
@@ -204,6 +214,7 @@ def extract(view: View, out: np.ndarray, stride: int = 2, t0: float | None = Non
         valid=valid,
         normals=normals,
         seconds=0.0,
+        texture=texture_map(view.rgb, stride, label.shape),
     )
     vp = apply_joint_cues(vp)
     return dataclasses.replace(vp, seconds=time.perf_counter() - t0)

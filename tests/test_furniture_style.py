@@ -148,3 +148,57 @@ def test_furniture_drawers_are_short_and_wide_and_doors_tall() -> None:
     }
     assert short_top >= 10
     assert gen.kind_weights(0.3)["drawer"] > gen.kind_weights(1.5)["drawer"]
+
+
+def _pull_offset(p: gen.PartSpec) -> tuple[float, float]:
+    """A part's grasp point from its front's centre, in half-widths and half-heights."""
+    c, s = p.cell_center, p.cell_size
+    return (p.handle_pos[1] - c[1]) / (0.5 * s[0]), (p.handle_pos[2] - c[2]) / (0.5 * s[1])
+
+
+def test_furniture_pulls_sit_where_real_furniture_puts_them() -> None:
+    """Over 60 cabinets: drawer pulls raised toward the top edge (41083's) and side
+    doors' horizontal pulls centred by the top edge (41083's) both show up; every bar
+    stays on its front, and the grasp point is the bar's centre (as the plain style)."""
+    raised = top_doors = 0
+    for seed in range(60):
+        spec = generate_cabinet(seed, style="furniture")
+        for p in spec.movable_parts:
+            if p.handle == "none" or (p.kind == "door" and p.hinge not in ("left", "right")):
+                continue
+            u, v = _pull_offset(p)
+            horizontal = p.handle == "bar" and abs(p.handle_axis[1]) > 0.99
+            raised += p.kind == "drawer" and v > 0.3
+            top_doors += p.kind == "door" and horizontal and abs(u) < 0.05 and v > 0.3
+            bars = [g for g in p.geoms if g.name == "handle_bar"]
+            for g in bars:  # half extents (y, z) on the front
+                if g.shape == "box":
+                    extent = 0.5 * np.asarray(g.size[1:])
+                else:
+                    extent = np.where(np.array(["y", "z"]) == g.axis, 0.5 * g.size[1], g.size[0])
+                at = np.asarray(g.pos) + p.origin - p.cell_center
+                assert np.all(np.abs(at[1:]) + extent <= 0.5 * p.cell_size + 1e-9), (seed, p.link)
+            if bars and g.shape == "cylinder":
+                np.testing.assert_allclose(np.asarray(g.pos)[1:] + p.origin[1:], p.handle_pos[1:])
+    assert raised >= 5 and top_doors >= 3, (raised, top_doors)
+
+
+def test_raised_drawer_pulls_only_on_fronts_that_read_as_furniture() -> None:
+    """A raised drawer pull on a flat-coloured slab is what a plain flap's pull looks
+    like; over 80 cabinets every raised drawer pull sits on a framed or figured-grain
+    front, and looks that raise pulls keep them centred on their plain-looking fronts."""
+    raised = kept_centred = 0
+    for seed in range(80):
+        spec = generate_cabinet(seed, style="furniture")
+        look = gen.draw_look(np.random.default_rng([seed, 1]))
+        for p in spec.movable_parts:
+            if p.kind != "drawer" or p.handle == "none":
+                continue
+            _, v = _pull_offset(p)
+            furniture = look.reads_as_furniture(*(float(x) for x in p.cell_size))
+            if v > 0.3:
+                raised += 1
+                assert furniture, (seed, p.link, look.drawer_design, look.finishes["front"])
+            elif look.drawer_pull_v > 0.0 and not furniture:
+                kept_centred += 1
+    assert raised >= 5 and kept_centred >= 3, (raised, kept_centred)

@@ -5,6 +5,7 @@ instances only: no rendering, no network."""
 from __future__ import annotations
 
 import math
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -23,7 +24,13 @@ from perception.fusion import (
     read_instance,
 )
 from perception.instances import Instance, ViewParts
-from perception.joint_cues import CUE_EVIDENCE, HandleSeen, closed_front_evidence
+from perception.joint_cues import (
+    CUE_EVIDENCE,
+    HandleSeen,
+    closed_front_evidence,
+    reads_as_furniture,
+)
+from perception.parts import texture_map
 
 FRONT = FrontFrame(np.eye(4), 0.8, 0.8, 0.4, True, 1000)
 
@@ -61,6 +68,41 @@ def test_closed_front_handle_cues() -> None:
     bare = closed_front_evidence(None, True)
     assert bare[0] > bare[1] == bare[2]  # handles elsewhere: a bare front is a panel
     assert closed_front_evidence(None, False)[0] == g  # no handles anywhere: no panel cue
+
+
+def test_an_edge_pull_rules_out_a_drawer_only_on_a_plain_front() -> None:
+    """A bar centred across by the top edge: a flap's on a flat-coloured front (the plain
+    style), a drawer's or a door's on a front that reads as furniture (41083's drawers)
+    or whose look is unknown."""
+    g = CUE_EVIDENCE
+    edge = HandleSeen(0.05, 0.7, 0.2, 0.01, 30)
+    assert np.allclose(closed_front_evidence(edge, True, furniture=False), [g, g, 1.0])
+    assert np.allclose(closed_front_evidence(edge, True, furniture=True), [g, 1.0, 1.0])
+    assert np.allclose(closed_front_evidence(edge, True), [g, 1.0, 1.0])
+
+
+def test_a_front_reads_as_furniture_by_its_texture() -> None:
+    """Grain lines (a luminance ramp every 4 pixels) read as furniture, a flat colour
+    with smooth shading does not; a front too small to judge, or a view without a
+    texture map, is unknown."""
+    h, w = 120, 160
+    mask = np.zeros((h, w), bool)
+    mask[20:80, 30:120] = True
+    shade = np.tile(np.linspace(80.0, 140.0, w * 2, dtype=np.float32), (h * 2, 1))
+    grain = shade.copy()
+    grain[::4] += 40.0  # one-pixel dark-light lines across the board
+    views = {}
+    for name, grey in (("flat", shade), ("grain", grain)):
+        rgb = np.repeat(np.clip(grey, 0, 255).astype(np.uint8)[..., None], 3, axis=2)
+        views[name] = SimpleNamespace(
+            texture=texture_map(rgb, 2, (h, w)), handle_prob=np.zeros((h, w))
+        )
+    assert reads_as_furniture(views["grain"], mask) is True
+    assert reads_as_furniture(views["flat"], mask) is False
+    tiny = np.zeros((h, w), bool)
+    tiny[10:14, 10:14] = True
+    assert reads_as_furniture(views["grain"], tiny) is None
+    assert reads_as_furniture(SimpleNamespace(texture=None), mask) is None
 
 
 def test_weighted_median_and_dividers() -> None:

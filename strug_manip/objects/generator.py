@@ -108,6 +108,13 @@ stream ``np.random.default_rng([seed, 1])`` (:func:`draw_look`):
 - hardware (:data:`HARDWARE`): steel, brass, bronze, black or chrome; door bars up to
   40 cm (0.4); square bars (0.3); round finials (0.3); mushroom knobs (0.5); a dark
   finger-grip slot on handle-less fronts (0.5);
+- doors hinged at the side (0.9; flaps 0.1, against 0.3 in the plain style);
+- pull placement: drawer pulls centred or raised toward the top edge (0.5: 35-75% of
+  the front's half-height above its centre; 41083's sit at 71%), raised only on fronts
+  that read as furniture (framed, or a figured grain: a raised pull on a flat slab is
+  the plain style's flap); side doors' pulls a
+  vertical bar by the free edge, centred or raised (0.5: up to 60%; 40147's at 51%), or
+  a horizontal bar centred across by the top edge (0.25: 70-90%; 41083's at 89%);
 - layout (:data:`MERGES`): one column's lower rows as one tall cell (a door beside a
   stack of drawers), the top row as one wide cell across the columns (a drawer over
   doors), or both; a tall cell is never a drawer.
@@ -610,6 +617,26 @@ LONG_BAR_PROB = 0.4
 #: A short top row (drawers over doors, as kitchen bases and 41083/40147 have) [m].
 DRAWER_ROW = (0.12, 0.20)
 DRAWER_ROW_PROB = 0.5
+#: Door hinge sides in the furniture style (one draw, as the plain style's): real
+#: storage furniture hinges its doors at the side (both SAPIEN objects: three side
+#: doors, no flap), and a flap's pull by its edge looks like a raised drawer pull.
+FURNITURE_HINGES: dict[str, float] = {"left": 0.45, "right": 0.45, "top": 0.05, "bottom": 0.05}
+#: Grain images from this index on are figured woods; lower ones the faint grain of
+#: paints and stone (:func:`draw_look`).
+FIGURED_GRAIN = 3
+#: Drawer pulls raised toward the top edge: probability, and the offset of the pull's
+#: centre above the front's centre in half-heights (41083's drawers: 0.71).
+DRAWER_PULL_RAISED = (0.5, (0.35, 0.75))
+#: Side doors' pulls: ``edge`` (vertical by the free edge, as the plain style) or
+#: ``top`` (horizontal, centred across, by the top edge: 41083's doors).
+DOOR_PULLS: dict[str, float] = {"edge": 0.75, "top": 0.25}
+#: Offset of a side door's pull above its centre in half-heights: an ``edge`` pull is
+#: raised with probability 0.5 by up to 0.6 (40147's door: 0.51), a ``top`` one sits
+#: at 0.7-0.9 (41083's: 0.89).
+DOOR_PULL_RAISE, DOOR_PULL_TOP = (0.0, 0.6), (0.7, 0.9)
+#: Clearance kept between a moved pull's geometry and its front's edge [m] (41083's
+#: drawer pulls: 1 cm).
+PULL_MARGIN = 0.01
 #: Part kinds by a cell's height / width: real drawers are short and wide (SAPIEN's
 #: 40147 and 41083: 0.35-0.39), real doors tall (1.2-1.3); cells in between keep the
 #: plain weights.
@@ -644,6 +671,9 @@ class FurnitureLook:
         knob_cap: a mushroom knob's cap radius / the knob's radius (0: a plain cylinder).
         grip_slot: handle-less fronts get a dark finger-grip slot.
         merge: key of :data:`MERGES`; merge_at: (column, row) draws in [0, 1).
+        drawer_pull_v: a drawer pull's centre above its front's centre, in half-heights.
+        door_pull: key of :data:`DOOR_PULLS`, for side-hinged doors.
+        door_pull_v: a side door's pull centre above the door's centre, in half-heights.
     """
 
     colors: dict[str, tuple[float, float, float, float]]
@@ -662,6 +692,9 @@ class FurnitureLook:
     merge: str
     merge_at: tuple[float, float]
     drawer_row: float = 0.0
+    drawer_pull_v: float = 0.0
+    door_pull: str = "edge"
+    door_pull_v: float = 0.0
 
     def rows(self, heights: np.ndarray) -> np.ndarray:
         """Row heights [m] with a short top row of drawers (``drawer_row`` > 0: its
@@ -698,6 +731,53 @@ class FurnitureLook:
             else g
             for g in geoms
         ]
+
+    def reads_as_furniture(self, fw: float, fh: float) -> bool:
+        """A ``fw`` x ``fh`` [m] drawer front in this look shows what no plain-style
+        front has: a frame (shaker, raised or moulded, on fronts of
+        :data:`MIN_FRAMED` and more) or a figured wood grain."""
+        framed = self.drawer_design != "slab" and min(fw, fh) >= MIN_FRAMED
+        finish = self.finishes["front"]
+        return framed or (finish.startswith("grain_") and int(finish[6:]) >= FIGURED_GRAIN)
+
+    def place_pull(
+        self, draft: dict, style: str, hp: dict[str, float], gap: float, metal: tuple
+    ) -> dict:
+        """``draft`` with its handle (geometry and grasp point, or a handle-less front's
+        would-be handle point) moved where this look puts pulls; flaps, shelves and
+        panels as they are. ``style``, ``hp``: the cabinet's handle style and params;
+        ``gap``: the reveal around fronts [m]; ``metal``: the handle colour."""
+        kind, hinge = draft["kind"], draft["hinge"]
+        if kind not in MOVABLE_KINDS or hinge in ("top", "bottom"):
+            return draft
+        fw, fh = (float(x) - 2 * gap for x in draft["cell_size"])
+        front = draft["cell_center"] - draft["origin"]  # front centre, link frame
+        face = np.array([front[0], *(draft["handle_pos"] - draft["origin"])[1:]])
+        bar_dir, v = ("y", self.drawer_pull_v) if kind == "drawer" else ("z", self.door_pull_v)
+        if kind == "drawer" and not self.reads_as_furniture(fw, fh):
+            # A raised pull on a flat-coloured slab is, pixel for pixel, the plain
+            # style's flap pull by its edge: keep the two conventions told apart by
+            # the look (the first retraining typed plain flaps drawers).
+            v = 0.0
+        if kind == "door" and self.door_pull == "top":
+            bar_dir, face[1] = "y", front[1]
+        along = fw if bar_dir == "y" else fh
+        # How far the pull reaches above its centre: half a vertical bar, a bar's
+        # radius, or a knob's (mushroom) cap.
+        reach = hp["knob_radius"] * max(self.knob_cap, 1.0)
+        if style == "bar":
+            reach = 0.5 * min(hp["bar_length"], 0.6 * along) if bar_dir == "z" else 0.0
+            reach += hp["bar_radius"] * (1.5 if self.bar_ends else 1.0)
+        face[2] = front[2] + min(v * 0.5 * fh, max(0.5 * fh - PULL_MARGIN - reach, 0.0))
+        hg, grasp = _handle_geoms(style, face, bar_dir, hp, 0.6 * along, metal)
+        axis = np.array([0.0, 1.0, 0.0]) if bar_dir == "y" else np.array([0.0, 0.0, 1.0])
+        geoms = [g for g in draft["geoms"] if not g.name.startswith("handle")]
+        return {
+            **draft,
+            "geoms": tuple(geoms + hg),
+            "handle_pos": draft["origin"] + grasp,
+            "handle_axis": axis if style == "bar" else draft["handle_axis"],
+        }
 
     def dress(self, draft: dict, tf: float) -> tuple[Geom, ...]:
         """A part's geometry in this look: framed fronts, finishes, restyled handles."""
@@ -816,7 +896,7 @@ def draw_look(rng: np.random.Generator) -> FurnitureLook:
 
     def finish(rgba: tuple) -> str:
         if rgba in FURNITURE_WOODS:  # figured grain
-            return f"grain_{int(rng.integers(3, GRAIN_COUNT))}"
+            return f"grain_{int(rng.integers(FIGURED_GRAIN, GRAIN_COUNT))}"
         return "" if rng.random() < 0.5 else f"grain_{int(rng.integers(0, 2))}"  # paint, stone
 
     finishes = {"body": finish(body), "front": finish(front), "top": finish(top_rgba)}
@@ -839,6 +919,12 @@ def draw_look(rng: np.random.Generator) -> FurnitureLook:
     cap = float(rng.uniform(1.3, 1.8)) if rng.random() < 0.5 else 0.0  # mushroom knobs
     merge_at = (float(rng.random()), float(rng.random()))
     drawer_row = _uniform(rng, DRAWER_ROW) if rng.random() < DRAWER_ROW_PROB else 0.0
+    raised, drawer_v = DRAWER_PULL_RAISED
+    drawer_pull_v = _uniform(rng, drawer_v) if rng.random() < raised else 0.0
+    door_pull = _choice(rng, DOOR_PULLS, tuple(DOOR_PULLS))
+    door_pull_v = _uniform(rng, DOOR_PULL_TOP if door_pull == "top" else DOOR_PULL_RAISE)
+    if door_pull == "edge" and rng.random() < 0.5:
+        door_pull_v = 0.0  # centred on the free edge, as the plain style
     return FurnitureLook(
         colors=colors, finishes=finishes, plinth=plinth, top=top,
         door_design=door_design, drawer_design=drawer_design,
@@ -846,6 +932,7 @@ def draw_look(rng: np.random.Generator) -> FurnitureLook:
         bar_length=bar_length, square_bar=bool(rng.random() < 0.3),
         bar_ends=bool(rng.random() < 0.3), knob_cap=cap, grip_slot=bool(rng.random() < 0.5),
         merge=_choice(rng, MERGES, tuple(MERGES)), merge_at=merge_at, drawer_row=drawer_row,
+        drawer_pull_v=drawer_pull_v, door_pull=door_pull, door_pull_v=door_pull_v,
     )  # fmt: skip
 
 
@@ -1053,9 +1140,10 @@ def generate_cabinet(
         )
         draft = _draft_part(
             rng, cell_kinds[idx], (y0, y1), (z0, z1), xf, xb, gap, tf, handle_style,
-            handle_params, colors,
+            handle_params, colors, HINGE_WEIGHTS if look is None else FURNITURE_HINGES,
         )  # fmt: skip
         if look is not None:
+            draft = look.place_pull(draft, handle_style, handle_params, gap, colors["handle"])
             draft["geoms"] = look.dress(draft, tf)
         draft.update(row=i, col=j, link=f"link_{idx + 1}", joint=f"joint_{idx + 1}")
         drafts.append(draft)
@@ -1120,8 +1208,10 @@ def _draft_part(
     style: str,
     hp: dict[str, float],
     colors: dict[str, tuple[float, float, float, float]],
+    hinges: dict[str, float] = HINGE_WEIGHTS,
 ) -> dict:
-    """Geometry (link frame), joint and grasp point of one cell's part."""
+    """Geometry (link frame), joint and grasp point of one cell's part (``hinges``: a
+    door's hinge-side weights)."""
     (y0, y1), (z0, z1) = ys, zs
     w, h, d = y1 - y0, z1 - z0, xf - xb
     yc, zc = 0.5 * (y0 + y1), 0.5 * (z0 + z1)
@@ -1175,7 +1265,7 @@ def _draft_part(
         )
         return out
     if kind == "door":
-        hinge = _choice(rng, HINGE_WEIGHTS, tuple(HINGE_WEIGHTS))
+        hinge = _choice(rng, hinges, tuple(hinges))
         # e: unit vector from the hinge line to the free edge; origin: hinge point.
         e, origin = {
             "left": (np.array([0.0, 1.0, 0.0]), np.array([xf, y0 + gap, zc])),
