@@ -109,6 +109,13 @@ BAR_MIN_LENGTH, BAR_MIN_ELONGATION = 0.05, 2.5
 MIN_HANDLE_PIXELS = 5
 #: Joint types of a fused part's class probabilities.
 TYPES = ("fixed", "prismatic", "revolute")
+#: An instance with at least this many mask pixels on an image border (network
+#: resolution) runs off the image there: the side of its rectangle facing that border
+#: is a bound, not an edge. Two, not one: a part whose edge ends a pixel short of the
+#: border may bleed one pixel onto it. (A tall cabinet's top drawer ran off the top of
+#: three of the four standard views; their medians put its front 3 cm low, and a Place
+#: carried the object into its real front's top edge, issue 39.)
+CUT_PIXELS = 2
 
 
 @dataclass(frozen=True)
@@ -163,6 +170,11 @@ class Reading:
             :data:`MOVED_OUT` in front of it (only a drawer does that).
         turned_out: it is a panel turned out of the front plane about an edge on it
             (a door).
+        cut: (4,) bool, which sides of ``face_rect`` (``y0, y1, z0, z1``) lie on the
+            image's border: the part may go on beyond them, so they are a bound, not
+            an edge (:func:`cut_sides`). door_cut: (4, 4) the same for each row of
+            ``door_rect`` (an open panel's sides across its hinge come from the hinge
+            and its width, and count as edges).
     """
 
     view: int
@@ -177,6 +189,8 @@ class Reading:
     depth_x: float
     moved_out: bool = False
     turned_out: bool = False
+    cut: np.ndarray = field(default_factory=lambda: np.zeros(4, dtype=bool))
+    door_cut: np.ndarray = field(default_factory=lambda: np.zeros((4, 4), dtype=bool))
 
 
 @dataclass
@@ -417,10 +431,14 @@ def _panel_plane(P: np.ndarray, iterations: int = 3) -> tuple[np.ndarray, np.nda
     return c, m, pts
 
 
-def read_instance(view: int, inst: Instance, front: FrontFrame) -> Reading:
+def read_instance(
+    view: int, inst: Instance, front: FrontFrame, seen_in: ViewParts | None = None
+) -> Reading:
     """Interpret one instance under every joint type (module docstring, step 2).
 
     Rectangles are cells: the seen front's extents widened by :data:`FRONT_GAP`.
+    ``seen_in`` is the view the instance is from (its camera and image size): with it,
+    the sides that run off the image are marked (``Reading.cut``); without it none are.
     """
     P = front.to_front(inst.points)
     x = P[:, 0]
@@ -487,10 +505,60 @@ def read_instance(view: int, inst: Instance, front: FrontFrame) -> Reading:
             primary = side
     as_door = primary is not None and inst.class_prob[2] >= inst.class_prob[1]
     rect = door_rect[primary].copy() if as_door else face_rect
+    cut = np.zeros(4, dtype=bool)
+    if seen_in is not None:
+        cut = cut_sides(inst.mask, face_rect, depth_x, front, seen_in)
+    door_cut = np.tile(cut, (4, 1))
+    if not closed:  # across the hinge an open panel's sides come from hinge and width
+        door_cut[:2, :2] = False
+        door_cut[2:, 2:] = False
     return Reading(
         view, inst, rect, face_rect, max(depth_x, 0.0), door_rect, door_q, ok, closed, depth_x,
-        bool(moved_out), bool(turned_out),
+        bool(moved_out), bool(turned_out), cut, door_cut,
     )  # fmt: skip
+
+
+def _project(p: np.ndarray, view: ViewParts) -> np.ndarray | None:
+    """Pixel ``(u, v)`` (network resolution; ``v`` down from the top row) of world
+    point ``p`` (3,) in ``view``, or None behind (or within 5 cm of) the camera."""
+    T = view.T_world_camera
+    pc = T[:3, :3].T @ (np.asarray(p, dtype=float) - T[:3, 3])
+    if pc[2] >= -0.05:
+        return None
+    h, w = view.shape
+    f = 0.5 * h / math.tan(0.5 * view.fovy)
+    return np.array([pc[0] / -pc[2] * f + 0.5 * w, -pc[1] / -pc[2] * f + 0.5 * h])
+
+
+def cut_sides(
+    mask: np.ndarray, rect: np.ndarray, depth_x: float, front: FrontFrame, view: ViewParts
+) -> np.ndarray:
+    """Which sides ``(y0, y1, z0, z1)`` of ``rect`` (front frame [m], at front-frame
+    ``x = depth_x``) run off ``view``'s image: (4,) bool, True where the image border
+    that the side faces (its outward direction projected at the rectangle's centre)
+    holds at least :data:`CUT_PIXELS` of the instance's ``mask`` (h, w)."""
+    borders = {
+        "top": int(mask[0].sum()), "bottom": int(mask[-1].sum()),
+        "left": int(mask[:, 0].sum()), "right": int(mask[:, -1].sum()),
+    }  # fmt: skip
+    centre = np.array([depth_x, 0.5 * (rect[0] + rect[1]), 0.5 * (rect[2] + rect[3])])
+    cut = np.zeros(4, dtype=bool)
+    uv0 = _project(front.to_world(centre), view)
+    if uv0 is None:
+        return cut
+    for k, (axis, sign) in enumerate(((1, -1.0), (1, 1.0), (2, -1.0), (2, 1.0))):
+        step = np.zeros(3)
+        step[axis] = 0.05 * sign
+        uv = _project(front.to_world(centre + step), view)
+        if uv is None:
+            continue
+        du, dv = uv - uv0
+        if abs(dv) >= abs(du):
+            border = "bottom" if dv > 0 else "top"
+        else:
+            border = "right" if du > 0 else "left"
+        cut[k] = borders[border] >= CUT_PIXELS
+    return cut
 
 
 # --- association ----------------------------------------------------------------------
@@ -514,14 +582,32 @@ def _covered(inner: np.ndarray, outer: np.ndarray) -> float:
 def _visible(rect: np.ndarray, front: FrontFrame, view: ViewParts) -> bool:
     """Whether the rectangle's centre projects into ``view``'s image."""
     p = front.to_world(np.array([0.0, 0.5 * (rect[0] + rect[1]), 0.5 * (rect[2] + rect[3])]))
-    T = view.T_world_camera
-    pc = T[:3, :3].T @ (p - T[:3, 3])
-    if pc[2] >= -0.05:
+    uv = _project(p, view)
+    if uv is None:
         return False
     h, w = view.shape
-    f = 0.5 * h / math.tan(0.5 * view.fovy)
-    u, v = pc[0] / -pc[2] * f + 0.5 * w, -pc[1] / -pc[2] * f + 0.5 * h
-    return 0 <= u < w and 0 <= v < h
+    return bool(0 <= uv[0] < w and 0 <= uv[1] < h)
+
+
+def fuse_sides(rects: np.ndarray, cut: np.ndarray, weights: np.ndarray | None) -> np.ndarray:
+    """One rectangle ``(y0, y1, z0, z1)`` from the readings' ``rects`` (N, 4) [m], side
+    by side from the readings that see the side end (``cut`` (N, 4) False): their
+    median, or with ``weights`` (N,) and at most two of them their weighted mean.
+    Where every reading runs off its image on a side, the farthest of them: each is a
+    bound the part reaches at least."""
+    out = np.empty(4)
+    for k in range(4):
+        ends = ~cut[:, k]
+        if not ends.any():
+            out[k] = rects[:, k].min() if k % 2 == 0 else rects[:, k].max()
+            continue
+        v = rects[ends, k]
+        if weights is None or len(v) > 2:
+            out[k] = float(np.median(v))
+        else:
+            w = weights[ends]
+            out[k] = float((w * v).sum() / w.sum())
+    return out
 
 
 def _handle_cue(handle: np.ndarray, rect: np.ndarray) -> np.ndarray:
@@ -558,7 +644,7 @@ def _summarise(
     wts = np.array([r.instance.pixels for r in group], dtype=float)
     wts /= wts.sum()
     rects = np.stack([r.face_rect for r in group])
-    rect = np.median(rects, axis=0) if len(group) > 2 else (wts[:, None] * rects).sum(axis=0)
+    rect = fuse_sides(rects, np.stack([r.cut for r in group]), wts)
     # Each view's probabilities already hold its geometric evidence (joint_cues).
     cls = (wts[:, None] * np.stack([r.instance.class_prob for r in group])).sum(axis=0) + 1e-9
     net = (wts[:, None] * np.stack([r.instance.hinge_prob for r in group])).sum(axis=0)
@@ -573,7 +659,11 @@ def _summarise(
         rows = [r for r in group if r.door_ok[k]]
         if rows:
             door_q[k] = float(np.median([r.door_q[k] for r in rows]))
-            door_rect[k] = np.median(np.stack([r.door_rect[k] for r in rows]), axis=0)
+            door_rect[k] = fuse_sides(
+                np.stack([r.door_rect[k] for r in rows]),
+                np.stack([r.door_cut[k] for r in rows]),
+                None,
+            )
     existence = _existence(group, visible)
     handles = [
         (r.instance.handle, r.instance.handle_score) for r in group if r.instance.handle is not None
@@ -750,7 +840,7 @@ def fuse(views: Sequence[ViewParts]) -> FusedCabinet:
     t0 = time.perf_counter()
     front = front_frame(views)
     readings = [
-        read_instance(i, inst, front)
+        read_instance(i, inst, front, v)
         for i, v in enumerate(views)
         if v.sees_cabinet
         for inst in v.instances
