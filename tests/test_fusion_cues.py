@@ -5,6 +5,7 @@ instances only: no rendering, no network."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace as dataclass_replace
 from types import SimpleNamespace
 
 import numpy as np
@@ -18,8 +19,11 @@ from perception.fusion import (
     Reading,
     _apart,
     _associate,
+    _summarise,
     _weighted_median,
+    cut_sides,
     front_frame,
+    fuse_sides,
     handle_shape,
     read_instance,
 )
@@ -225,3 +229,50 @@ def test_the_front_takes_in_overlay_fronts_on_a_face_frame() -> None:
     front = front_frame([view])
     assert front.width > 0.78, front.width  # the whole face, 0.82 m
     assert abs(front.to_front(np.array([0.0, -0.2, 0.3]))[1] + 0.19) < 0.03  # centred on it
+
+
+def _camera_facing_front(x: float, z: float) -> np.ndarray:
+    """``T_world_camera`` of a camera at (x, 0, z) looking along -x (at the front of
+    :data:`FRONT`), image right = +y, image up = +z."""
+    T = np.eye(4)
+    T[:3, :3] = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    T[:3, 3] = [x, 0.0, z]
+    return T
+
+
+def test_a_part_that_runs_off_an_image_is_bounded_there_not_ended() -> None:
+    """A tall drawer's front, 0.9-1.3 m up, runs off the top of three views, which see
+    it to 1.2 m, and one view sees all of it: the fused front reaches 1.3 m (the three
+    views' median put it 10 cm low), and a side no view sees end is the farthest seen."""
+    h, w = 120, 160
+    view = ViewParts(_camera_facing_front(2.0, 1.0), 0.8, (h, w), np.zeros((0, 3)),
+                     np.zeros(0, int), np.zeros((0, 3)), [], np.zeros((h, w)),
+                     np.zeros((h, w, 3)), np.zeros((h, w), bool), np.zeros((h, w, 3)),
+                     0.0)  # fmt: skip
+    y, z = np.meshgrid(np.linspace(-0.2, 0.2, 20), np.linspace(0.9, 1.2, 20))
+    pts = np.stack([np.zeros(y.size), y.ravel(), z.ravel()], axis=1)
+    top = np.zeros((h, w), dtype=bool)
+    top[:40, 60:100] = True  # the instance touches the image's top row
+    inst = _instance(pts, len(pts))
+    cut_inst = Instance(**{**inst.__dict__, "mask": top})
+    r = read_instance(0, cut_inst, FRONT, view)
+    assert list(r.cut) == [False, False, False, True]  # y0, y1, z0, z1
+    assert list(r.door_cut[0]) == [False, False, False, True]  # closed: every door row
+    left = np.zeros((h, w), dtype=bool)
+    left[40:80, :30] = True
+    assert list(cut_sides(left, r.face_rect, 0.0, FRONT, view)) == [True, False, False, False]
+    inside = np.zeros((h, w), dtype=bool)
+    inside[40:80, 60:100] = True
+    assert not cut_sides(inside, r.face_rect, 0.0, FRONT, view).any()
+    assert not read_instance(0, cut_inst, FRONT).cut.any()  # no view given: no bounds
+
+    cut_rect, whole = [-0.2, 0.2, 0.9, 1.2], [-0.19, 0.21, 0.9, 1.3]
+    group = [dataclass_replace(_reading(k, cut_rect, 900), cut=np.array([0, 0, 0, 1], bool))
+             for k in range(3)] + [_reading(3, whole, 300)]  # fmt: skip
+    fused = _summarise(group, 0, 4, FRONT).rect
+    assert abs(fused[3] - 1.3) < 1e-9 and abs(fused[2] - 0.9) < 1e-9
+    assert abs(fused[1] - 0.2) < 1e-9  # the other sides: the median of all four
+    rects = np.array([cut_rect, cut_rect, [-0.2, 0.2, 0.9, 1.25]])
+    cut = np.zeros((3, 4), dtype=bool)
+    cut[:, 3] = True
+    assert fuse_sides(rects, cut, None)[3] == 1.25  # no view ends it: the farthest bound
