@@ -172,9 +172,7 @@ class Reading:
             (a door).
         cut: (4,) bool, which sides of ``face_rect`` (``y0, y1, z0, z1``) lie on the
             image's border: the part may go on beyond them, so they are a bound, not
-            an edge (:func:`cut_sides`). door_cut: (4, 4) the same for each row of
-            ``door_rect`` (an open panel's sides across its hinge come from the hinge
-            and its width, and count as edges).
+            an edge (:func:`cut_sides`).
     """
 
     view: int
@@ -190,7 +188,16 @@ class Reading:
     moved_out: bool = False
     turned_out: bool = False
     cut: np.ndarray = field(default_factory=lambda: np.zeros(4, dtype=bool))
-    door_cut: np.ndarray = field(default_factory=lambda: np.zeros((4, 4), dtype=bool))
+
+    @property
+    def door_cut(self) -> np.ndarray:
+        """(4, 4) bool: :attr:`cut` for each row of ``door_rect``; an open panel's
+        sides across its hinge come from the hinge and its width, and are edges."""
+        out = np.tile(self.cut, (4, 1))
+        if not self.closed_door:
+            out[:2, :2] = False  # side doors: their y sides
+            out[2:, 2:] = False  # flaps: their z sides
+        return out
 
 
 @dataclass
@@ -508,13 +515,9 @@ def read_instance(
     cut = np.zeros(4, dtype=bool)
     if seen_in is not None:
         cut = cut_sides(inst.mask, face_rect, depth_x, front, seen_in)
-    door_cut = np.tile(cut, (4, 1))
-    if not closed:  # across the hinge an open panel's sides come from hinge and width
-        door_cut[:2, :2] = False
-        door_cut[2:, 2:] = False
     return Reading(
         view, inst, rect, face_rect, max(depth_x, 0.0), door_rect, door_q, ok, closed, depth_x,
-        bool(moved_out), bool(turned_out), cut, door_cut,
+        bool(moved_out), bool(turned_out), cut,
     )  # fmt: skip
 
 
