@@ -16,7 +16,10 @@ from perception.fusion import fuse
 from perception.inputs import check_view
 from perception.likelihood import log_likelihood, quantile_hausdorff
 from perception.parts import extract
+from planners.errors import ConfigError
 from strug_manip.domains.manipulation.belief import BeliefConfig, sample_particles
+from strug_manip.objects import generator as gen
+from strug_manip.objects.assembly import FRONT
 from strug_manip.objects.partnet import cabinet_urdf
 from strug_manip.world.perception_data import render_episode
 from strug_manip.world.sim import ManipulationWorld
@@ -106,6 +109,34 @@ def test_particles_are_cabinets_the_world_compiles() -> None:
                 assert abs(got["cabinet/" + name] - q) < 1e-9
         finally:
             world.close()
+
+
+def test_particles_reach_deeper_than_the_views_see_and_their_drawers_farther() -> None:
+    """The views seldom see a carcass's back edge: each particle's depth is the seen
+    depth plus a draw from ``depth_beyond_seen``, and its drawers' limits span the
+    generator's travel share of the generator's box depths (which no view of a shut
+    drawer shows); a range that is no range is refused, named."""
+    fused = _oracle_fusion(render_episode(3000, 4))
+    assert fused.front.depth_seen
+    cfg = BeliefConfig(particles=200)
+    particles = sample_particles([fused], np.random.default_rng(2), cfg)
+    lo, hi = cfg.depth_beyond_seen
+    depths = np.array([p.spec.depth for p in particles])
+    assert np.all(depths >= fused.front.depth + lo - 1e-9)
+    assert np.all(depths <= fused.front.depth + hi + 1e-9)
+    assert np.ptp(depths) > 0.8 * (hi - lo)  # the draw spans the range
+    shares = [
+        part.upper / (p.spec.depth - FRONT - 0.01)
+        for p in particles
+        for part in p.spec.parts
+        # (a drawer seen open has its limit past where it was seen, not drawn)
+        if part.joint_type == "prismatic" and part.upper > p.q.get(part.joint, 0.0) + 0.011
+    ]
+    low = gen.DRAWER_TRAVEL_FRAC[0] * gen.DRAWER_DEPTH_FRAC[0]
+    high = gen.DRAWER_TRAVEL_FRAC[1] * gen.DRAWER_DEPTH_FRAC[1]
+    assert low - 1e-9 <= min(shares) < low + 0.05 and high - 0.05 < max(shares) <= high + 1e-9
+    with pytest.raises(ConfigError, match="depth_beyond_seen"):
+        BeliefConfig(depth_beyond_seen=(0.1, -0.1))
 
 
 def test_belief_moves_keep_alternatives() -> None:

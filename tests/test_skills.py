@@ -960,6 +960,26 @@ def test_a_pull_that_slides_the_cabinet_stops_there(sample) -> None:
     assert max(r.displacement for r in sample) < 3 * limit
 
 
+def test_an_opening_past_the_likeliest_limit_goes_on_slowly(worlds) -> None:
+    """A drawer's limit shows in no view: pulled on toward a longer model's limit
+    (``joint.limit``), an opening eases from ``ease_distance`` before the likeliest
+    model's (``likely_limit`` less the margin) to its end, so the part meets either one
+    slowly; with the likeliest limit the longest it eases as before."""
+    world = worlds["drawers_11"]
+    world.reset()
+    link = "link_1"
+    g = _grasp(world, link)
+    joint = dataclasses.replace(world_joint(world, link, "drawer"), limit=0.3)
+    p = DEFAULT_PARAMS
+    amount = min(p.drawer_travel, joint.limit - p.limit_margin_m)
+    for likely, slow in ((0.15, amount - (0.15 - p.limit_margin_m)), (0.3, 0.0)):
+        plan = OpenDrawer(g, joint, likely_limit=likely).plan(world, p)
+        lines = {ln.name: ln for ln in plan.lines}
+        assert lines["ease"].speed == p.ease_speed
+        assert abs(lines["ease"].length - (slow + p.ease_distance)) < p.line_step, likely
+        assert abs(lines["move"].length + lines["ease"].length - amount) < 1e-9
+
+
 def test_an_opening_ends_in_a_slow_ease_line(worlds) -> None:
     """An opening's pull is two lines: ``move`` at ``open_speed``, then ``ease``, its
     last ``ease_distance`` at ``ease_speed`` (the part meets a stop there slowly); one

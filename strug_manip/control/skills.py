@@ -223,10 +223,12 @@ def _grasp_and_move(
     name: str,
     part_q: np.ndarray | None,
     p: SkillParams,
+    ease: float | None = None,
 ) -> SkillPlan:
     """Approach g, grasp, move along ``poses``, release, retreat, withdraw (level, away
     from the front, for a grasp that is not from above): the plan of every skill that
-    moves a part by its handle."""
+    moves a part by its handle. An opening (``name`` ``move``) eases its last ``ease``
+    of TCP travel [m] (default ``p.ease_distance``, :func:`_eased`)."""
     link, joint, _ = part_at(world, g)
     body = world.scene.cabinet_prefix + link
     pre, approach = _approach(g, body, p)
@@ -240,7 +242,7 @@ def _grasp_and_move(
         name, poses, speed, touch=probe_touch, holding=True, part_joint=joint, part_q=part_q,
         tolerance=tol,
     )  # fmt: skip
-    moves = _eased(moving, p) if name == "move" else (moving,)
+    moves = _eased(moving, p, ease) if name == "move" else (moving,)
     end = moving.poses[-1]
     q_end = None if part_q is None else np.full(1, part_q[-1])
     back = retreat_poses(end, p.retreat_distance, p.line_step)
@@ -262,18 +264,23 @@ def _grasp_and_move(
     return SkillPlan(skill, pre, phases, part=link)
 
 
-def _eased(line: Line, p: SkillParams) -> tuple[Line, ...]:
-    """An opening's ``move`` line as two: ``move`` up to ``ease_distance`` of TCP travel
-    before its end, then ``ease``, the rest at ``ease_speed`` (a path no longer than
-    twice that stays one line). The part comes to rest slowly where the opening ends:
-    the arm's servos, wound up by the part's damping at the opening's speed, carry the
-    hand up to 2.4 cm beyond the end of a line, and a part whose stop lies there (a
-    believed limit a centimetre or two too far out) hit it at full speed and tipped the
-    cabinet, which slid the drawer back 6 cm into the carcass as it came down."""
+def _eased(line: Line, p: SkillParams, ease: float | None = None) -> tuple[Line, ...]:
+    """An opening's ``move`` line as two: ``move`` up to ``ease`` of TCP travel [m]
+    (default ``p.ease_distance``) before its end, then ``ease``, the rest at
+    ``ease_speed`` (a path no longer than twice ``p.ease_distance`` stays one line; an
+    ``ease`` as long as the path eases all of it). The part comes to rest slowly where
+    the opening ends: the arm's servos, wound up by the part's damping at the opening's
+    speed, carry the hand up to 2.4 cm beyond the end of a line, and a part whose stop
+    lies there (a believed limit a centimetre or two too far out) hit it at full speed
+    and tipped the cabinet, which slid the drawer back 6 cm into the carcass as it came
+    down."""
     n = len(line.poses)
-    k = round(n * p.ease_distance / line.length) if line.length > 0 else 0
-    if line.length <= 2 * p.ease_distance or not 0 < k < n:
+    ease = p.ease_distance if ease is None else ease
+    k = min(round(n * ease / line.length), n) if line.length > 0 else 0
+    if line.length <= 2 * p.ease_distance or k <= 0:
         return (line,)
+    if k == n:
+        return (dataclasses.replace(line, name="ease", speed=p.ease_speed),)
     q = line.part_q
     head = dataclasses.replace(
         line, poses=line.poses[: n - k], length=line.length * (n - k) / n,
@@ -291,11 +298,18 @@ def _eased(line: Line, p: SkillParams) -> tuple[Line, ...]:
 
 @dataclass(frozen=True)
 class _Opening(Skill):
-    """Grasp the handle at ``g`` and open the part along ``joint`` by ``amount``."""
+    """Grasp the handle at ``g`` and open the part along ``joint`` by ``amount``.
+
+    ``likely_limit``: the travel left [m or rad] under the likeliest model, where
+    ``joint.limit`` is a longer model's: the opening goes at its speed to
+    ``params.ease_distance`` before that (less ``params.limit_margin_*``) and on from
+    there at ``params.ease_speed``, so that whichever of the two the part's end is, it
+    meets it slowly (None: ``joint.limit`` is the likeliest's)."""
 
     g: np.ndarray
     joint: BelievedJoint
     amount: float | None = None
+    likely_limit: float | None = None
 
     def default_amount(self, p: SkillParams) -> float:
         raise NotImplementedError
@@ -331,8 +345,12 @@ class _Opening(Skill):
             # The world holds the part on another kind of joint (a twin of the true
             # cabinet simulating a wrong belief): its checks cannot move it along.
             part_q = None
+        ease = params.ease_distance
+        if self.likely_limit is not None:
+            slow = amount - min(amount, max(self.likely_limit - margin, 0.0))
+            ease += slow * max(radius, 1e-3)
         return _grasp_and_move(
-            self.name, world, g, poses, params.open_speed, "move", part_q, params
+            self.name, world, g, poses, params.open_speed, "move", part_q, params, ease
         )
 
 

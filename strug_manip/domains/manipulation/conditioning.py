@@ -6,8 +6,9 @@ the cabinet's base has moved since the start (the carcass, which the head camera
 shows to millimetres; taken from the simulator as a perfect localisation; each
 particle's own cabinet moves by that rigid motion from where it stood, its own front
 where perception put it) and, when the hand is empty, where the object rests (it is
-tracked as well), and which parts stand shut (a front flush with the carcass; which way
-a part opens the camera does not show, so an open part keeps each particle's own joint).
+tracked as well), which parts stand shut (a front flush with the carcass) and how far
+out the open ones stand (a drawer of a particle's is put there, along its own axis;
+which way a door opens the camera does not show, so it keeps each particle's angle).
 Each particle keeps its other parts' joints and, when the real hand holds the object,
 its own idea of the grasp; a particle whose hand is empty while the real one holds the
 object (its twin's Place went through where the real one stopped) gets the object back
@@ -20,7 +21,7 @@ particle, and every later Place aims into it.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
@@ -47,10 +48,13 @@ def condition(
     w: ParticleWorlds,
     parts: Sequence[CataloguePart],
     shut: Sequence[int],
+    out: Mapping[int, np.ndarray] | None = None,
 ) -> ParticleBelief:
     """``belief`` given what the real world ``real`` shows for certain (module
     docstring); ``shut``: the catalogued parts whose real part stands shut
-    (:func:`is_shut`)."""
+    (:func:`is_shut`); ``out``: how far the real handle of each catalogued part that
+    stands open is out of where it is shut, world (3,) [m] (:func:`drawn_out`)."""
+    out = {} if out is None else out
     base = np.array([real.robot_qpos()[j] for j in BASE_JOINTS])
     moved = real.cabinet_pose() @ np.linalg.inv(real.scene.T_world_cabinet)
     holding = holds_object(real)
@@ -62,6 +66,7 @@ def condition(
         tw.world.copy_joints(real, known)
         tw.set_robot_base(base)
         opened = _opened(parts, s.origin, shut, tw.world)
+        opened |= drawn_out(parts, s.origin, out, tw.world)
         if opened:
             tw.world.set_parts(opened)
         if T_go is not None and not holds_object(tw.world):
@@ -96,6 +101,30 @@ def _opened(
     spec = world.scene.cabinet_spec
     held = [spec.part(link) for k in shut if (link := parts[k].links[i]) is not None]
     return {p.joint: 0.0 for p in held if not is_shut(world, p)}
+
+
+def drawn_out(
+    parts: Sequence[CataloguePart], i: int, out: Mapping[int, np.ndarray], world: ManipulationWorld
+) -> dict[str, float]:
+    """Particle ``i``'s drawers (in its twin's ``world``) at the catalogued parts
+    ``out`` (a real handle's offset from shut, world (3,) [m]), each pulled out as far
+    as that offset along its own axis, within its limits, by joint name.
+
+    A drawer's twin ends an opening where its own limit or its own model of the pull
+    stops it; the real front stands where it stands. Where the two differed, the
+    particle kept its own: after a real opening that its twin had stop short (or that
+    its limit, short of the real one, capped), every particle held the drawer too
+    little out for the object and planned no Place, and the robot opened other parts
+    to the end of the episode (OpenDrawer episodes 9605, 9513). A door keeps its own
+    angle: which way it opens the front's offset does not say."""
+    spec, R = world.scene.cabinet_spec, world.cabinet_pose()[:3, :3]
+    q = {}
+    for k, d in out.items():
+        link = parts[k].links[i]
+        if link is None or (p := spec.part(link)).joint_type != "prismatic":
+            continue
+        q[p.joint] = float(np.clip(np.asarray(d) @ (R @ np.asarray(p.axis)), p.lower, p.upper))
+    return q
 
 
 def unmoved(belief: ParticleBelief, prior: ParticleBelief | None) -> ParticleBelief:

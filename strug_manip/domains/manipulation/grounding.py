@@ -5,7 +5,8 @@ reward of an outcome (:func:`reward`); shared by the twins' POMDP and the real r
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import replace
 
 import numpy as np
 
@@ -78,14 +79,37 @@ def skills(
     spec_part = w.particles[holder].spec.part(part.links[holder])
     q = w.particles[holder].q.get(spec_part.joint, 0.0)
     plan_world = w.fetch(holder, root.best.get(holder))
+    if spec_part.joint_type == "prismatic":
+        # A drawer stands where the real front does (conditioning.drawn_out): it is
+        # grasped, and pulled on, from there, not from where it stood at the start (a
+        # drawer opened too little was grasped 0.13 m behind its handle).
+        q = position(plan_world, spec_part.joint)
     T = cabinet_frame(plan_world.cabinet_pose(), w.pose(holder))
     grasps = handle_grasps(spec_part, q, T)
     if a.skill in ("OpenDrawer", "OpenDoor"):
         joint = BelievedJoint.of_part(spec_part, q, T)
-        cls = OpenDrawer if a.skill == "OpenDrawer" else OpenDoor
-        return [cls(g, joint) for g in grasps], plan_world
+        if a.skill == "OpenDrawer":
+            longest = longest_travel(w, part.links, q)
+            likely, joint = joint.limit, replace(joint, limit=max(joint.limit, longest))
+            return [OpenDrawer(g, joint, likely_limit=likely) for g in grasps], plan_world
+        return [OpenDoor(g, joint) for g in grasps], plan_world
     probe = {"Push": Push, "PullV": PullV, "PullH": PullH}[a.skill]
     return [probe(g) for g in grasps], plan_world
+
+
+def longest_travel(w: ParticleWorlds, links: Sequence[str | None], q: float) -> float:
+    """The longest travel [m] any particle's drawer at a catalogued part (``links``: its
+    link per particle) has left from ``q`` [m]: how far an opening of it goes on,
+    slowly, past the likeliest model's limit. A drawer's limit shows in no view (the
+    particles spread it over the generator's range, :mod:`.belief`); an opening that
+    stopped at the likeliest model's left the real drawer out too little for the
+    object, and every particle without a longer limit with no way to open it more."""
+    uppers = [
+        p.upper
+        for i, link in enumerate(links)
+        if link is not None and (p := w.particles[i].spec.part(link)).joint_type == "prismatic"
+    ]
+    return max(uppers, default=q) - q
 
 
 def cabinet_frame(T_now: np.ndarray, T_reset: np.ndarray) -> np.ndarray:

@@ -42,7 +42,12 @@ from strug_manip.domains.manipulation import conditioning
 from strug_manip.domains.manipulation.actions import SAME_PART, TABLE, ManipAction, label
 from strug_manip.domains.manipulation.catalogue import Root, best_states, representatives
 from strug_manip.domains.manipulation.episode_setup import draw_episode, handles
-from strug_manip.domains.manipulation.grounding import first_feasible, handle_point, reward
+from strug_manip.domains.manipulation.grounding import (
+    first_feasible,
+    handle_point,
+    position,
+    reward,
+)
 from strug_manip.domains.manipulation.health import HealthRecorder, RealStep
 from strug_manip.domains.manipulation.model import EpisodeView, ManipulationPOMDP
 from strug_manip.domains.manipulation.oracle import take_over, true_particle
@@ -61,6 +66,7 @@ from strug_manip.domains.manipulation.state import (
     observation_key,
 )
 from strug_manip.domains.manipulation.worlds import Timers
+from strug_manip.objects.generator import PartSpec
 from strug_manip.world.sim import CameraFrame, ManipulationWorld, WorldState
 from strug_manip.world.views import cabinet_cloud, look_poses, take_views
 
@@ -250,8 +256,8 @@ class RealEnvironment:
             return belief
         if real.still:
             belief = conditioning.unmoved(belief, self.belief)
-        shut = self.shut_parts()
-        self.belief = conditioning.condition(belief, real.world, w, model.parts, shut)
+        shut, out = self.shut_parts(), self.fronts_out()
+        self.belief = conditioning.condition(belief, real.world, w, model.parts, shut, out)
         if self.oracle:
             self.belief = take_over(self.belief, real.world, w)
         if self.health is not None:
@@ -386,9 +392,32 @@ class RealEnvironment:
         began, was within :data:`~.actions.SAME_PART` of the catalogued point (none:
         perception's part has no true counterpart there)."""
         rw = self._need_real().world
+        return [k for k, part in self._true_parts() if conditioning.is_shut(rw, part)]
+
+    def fronts_out(self) -> dict[int, np.ndarray]:
+        """How far the true part at each catalogued part that stands open has its handle
+        out of where it is shut, by catalogued part: world (3,) [m], in the cabinet as it
+        stands now. The head camera's cloud shows a front standing out of the carcass to
+        about a centimetre (taken from the simulator, as the carcass's motion is);
+        :func:`.conditioning.condition` puts each particle's drawer there."""
+        rw = self._need_real().world
+        T = rw.cabinet_pose()
+        out = {}
+        for k, part in self._true_parts():
+            if conditioning.is_shut(rw, part) or part.handle_pos is None:
+                continue
+            now = part.handle_at(position(rw, part.joint), T)
+            shut = part.handle_at(0.0, T)
+            if now is not None and shut is not None:
+                out[k] = now - shut
+        return out
+
+    def _true_parts(self) -> list[tuple[int, PartSpec]]:
+        """(catalogued part, the true part there) for each catalogued part with a true
+        counterpart within :data:`~.actions.SAME_PART` (:meth:`real_link`)."""
+        spec = self._need_real().world.scene.cabinet_spec
         links = [self.real_link(k, within=SAME_PART) for k in range(len(self.model.parts))]
-        return [k for k, link in enumerate(links) if link is not None
-                and conditioning.is_shut(rw, rw.scene.cabinet_spec.part(link))]  # fmt: skip
+        return [(k, spec.part(link)) for k, link in enumerate(links) if link is not None]
 
     # --- reports -------------------------------------------------------------------------
     def report(self) -> dict[str, Any]:
