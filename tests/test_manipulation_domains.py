@@ -18,6 +18,7 @@ from strug_manip.domains import MANIPULATION_DOMAINS, make_domain
 from strug_manip.domains.manipulation import episode_setup
 from strug_manip.domains.manipulation.actions import SAME_PART, TABLE, ManipAction, part_kind
 from strug_manip.domains.manipulation.catalogue import representatives
+from strug_manip.domains.manipulation.conditioning import swing
 from strug_manip.domains.manipulation.grounding import cabinet_frame, handle_point
 from strug_manip.domains.manipulation.health import status_of
 from strug_manip.domains.manipulation.real import REAL_PLAN_MODELS
@@ -28,6 +29,7 @@ from strug_manip.domains.manipulation.state import (
     observation_key,
 )
 from strug_manip.experiments.episode import run_episode
+from strug_manip.objects.generator import generate_cabinet
 from strug_manip.objects.hypotheses import BelievedJoint, model_of
 from strug_manip.robot.fetch import GRIPPER_SITE
 from strug_manip.world.scene import cabinet_pose
@@ -271,9 +273,9 @@ def test_an_opening_grasps_where_the_dragged_cabinet_stands(drawer_episode):
 def test_a_part_the_real_robot_sees_shut_is_shut_in_every_particle(shut_episode):
     """A drawer every particle holds open (as after a twin's opening) that stands shut in
     the real cabinet (as after an arm pushed it shut) is shut in every particle after
-    conditioning; one open in the real cabinet keeps each particle's own door angle (the
-    camera shows a front flush or standing out, not which way an open part opens), and
-    a particle's drawer there stands out as far as the real front, along its own axis."""
+    conditioning; a particle's part where the real one stands open is moved along its
+    own joint as far as the real handle is out (a drawer along its axis, a door about
+    its hinge: the camera shows where a front stands, not which way it opens)."""
     d, s0, belief = shut_episode
     rng = np.random.default_rng(0)
     real = _real_step(d, s0, ManipAction("Pick", grasp="top"), rng)
@@ -305,16 +307,32 @@ def test_a_part_the_real_robot_sees_shut_is_shut_in_every_particle(shut_episode)
                     continue
                 p = spec.part(own)
                 q = qs[tw.world.scene.cabinet_prefix + p.joint]
-                if link == left_open and p.joint_type == "prismatic":
-                    axis = tw.world.cabinet_pose()[:3, :3] @ np.asarray(p.axis)
-                    assert q == pytest.approx(min(out[k] @ axis, p.upper), abs=1e-9), (k, own)
-                    if real_open.joint_type == "prismatic":  # 0.1 m out, to the axes' tilt
-                        assert q == pytest.approx(min(0.1, p.upper), abs=0.005), (k, own)
-                else:
-                    assert q == pytest.approx(p.upper if link == left_open else 0.0), (k, own)
+                if link != left_open:
+                    assert q == pytest.approx(0.0), (k, own)
+                    continue
+                local = tw.world.cabinet_pose()[:3, :3].T @ out[k]
+                seen = local @ p.axis if p.joint_type == "prismatic" else swing(p, local)
+                assert q == pytest.approx(np.clip(seen, p.lower, p.upper), abs=1e-9), (k, own)
+                if p.joint_type == real_open.joint_type == "prismatic":  # to the axes' tilt
+                    assert q == pytest.approx(min(0.1, p.upper), abs=0.005), (k, own)
     finally:
         rw.restore(s0.sim)
         d.environment.condition(belief)
+
+
+def test_a_turn_about_a_hinge_is_read_back_from_the_handles_offset():
+    """:func:`~strug_manip.domains.manipulation.conditioning.swing` recovers the angle
+    of a door, a flap or a drop-down flap from how far its handle moved; a drawer's
+    offset along its axis is its travel."""
+    parts = [p for seed in range(12) for p in generate_cabinet(seed).movable_parts
+             if p.handle_pos is not None]  # fmt: skip
+    hinges = {p.hinge for p in parts if p.joint_type == "revolute"}
+    assert {"left", "right"} <= hinges and hinges & {"top", "bottom"}, hinges
+    for p in parts:
+        for q in (0.05, 0.15, p.upper):
+            d = p.handle_at(q) - p.handle_at(0.0)
+            seen = d @ p.axis if p.joint_type == "prismatic" else swing(p, d)
+            assert seen == pytest.approx(q, abs=1e-9), (p.link, p.hinge, q)
 
 
 def _standing_front(z: float, depth: float = 0.4) -> np.ndarray:

@@ -6,9 +6,10 @@ the cabinet's base has moved since the start (the carcass, which the head camera
 shows to millimetres; taken from the simulator as a perfect localisation; each
 particle's own cabinet moves by that rigid motion from where it stood, its own front
 where perception put it) and, when the hand is empty, where the object rests (it is
-tracked as well), which parts stand shut (a front flush with the carcass) and how far
-out the open ones stand (a drawer of a particle's is put there, along its own axis;
-which way a door opens the camera does not show, so it keeps each particle's angle).
+tracked as well), which parts stand shut (a front flush with the carcass) and where
+the open ones' handles are (each particle's part is moved there along its own joint,
+a drawer along its axis, a door about its hinge: which way a part opens the camera
+does not show, where its front stands it does).
 Each particle keeps its other parts' joints and, when the real hand holds the object,
 its own idea of the grasp; a particle whose hand is empty while the real one holds the
 object (its twin's Place went through where the real one stopped) gets the object back
@@ -53,7 +54,7 @@ def condition(
     """``belief`` given what the real world ``real`` shows for certain (module
     docstring); ``shut``: the catalogued parts whose real part stands shut
     (:func:`is_shut`); ``out``: how far the real handle of each catalogued part that
-    stands open is out of where it is shut, world (3,) [m] (:func:`drawn_out`)."""
+    stands open is out of where it is shut, world (3,) [m] (:func:`as_seen`)."""
     out = {} if out is None else out
     base = np.array([real.robot_qpos()[j] for j in BASE_JOINTS])
     moved = real.cabinet_pose() @ np.linalg.inv(real.scene.T_world_cabinet)
@@ -66,7 +67,7 @@ def condition(
         tw.world.copy_joints(real, known)
         tw.set_robot_base(base)
         opened = _opened(parts, s.origin, shut, tw.world)
-        opened |= drawn_out(parts, s.origin, out, tw.world)
+        opened |= as_seen(parts, s.origin, out, tw.world)
         if opened:
             tw.world.set_parts(opened)
         if T_go is not None and not holds_object(tw.world):
@@ -103,28 +104,51 @@ def _opened(
     return {p.joint: 0.0 for p in held if not is_shut(world, p)}
 
 
-def drawn_out(
+def as_seen(
     parts: Sequence[CataloguePart], i: int, out: Mapping[int, np.ndarray], world: ManipulationWorld
 ) -> dict[str, float]:
-    """Particle ``i``'s drawers (in its twin's ``world``) at the catalogued parts
-    ``out`` (a real handle's offset from shut, world (3,) [m]), each pulled out as far
-    as that offset along its own axis, within its limits, by joint name.
+    """Particle ``i``'s parts (in its twin's ``world``) at the catalogued parts ``out``
+    (a real handle's offset from where it is shut, world (3,) [m]), each moved as far
+    as its own joint takes its handle by that offset, within its limits, by joint name:
+    a drawer along its own axis, a door about its own hinge.
 
-    A drawer's twin ends an opening where its own limit or its own model of the pull
-    stops it; the real front stands where it stands. Where the two differed, the
+    A twin ends an opening where its own limit or its own model of the pull stops it,
+    and a real part may move after (a door the arm swung back as it went for the
+    object); the real front stands where it stands. Where the two differed, the
     particle kept its own: after a real opening that its twin had stop short (or that
     its limit, short of the real one, capped), every particle held the drawer too
     little out for the object and planned no Place, and the robot opened other parts
-    to the end of the episode (OpenDrawer episodes 9605, 9513). A door keeps its own
-    angle: which way it opens the front's offset does not say."""
+    to the end of the episode (OpenDrawer episodes 9605, 9513); a door swung back from
+    1.31 to 0.73 rad while the robot picked the object, every particle held it wide
+    open, and the Place struck it and slid the cabinet (OpenDoor episode 9626).
+    """
     spec, R = world.scene.cabinet_spec, world.cabinet_pose()[:3, :3]
     q = {}
     for k, d in out.items():
         link = parts[k].links[i]
-        if link is None or (p := spec.part(link)).joint_type != "prismatic":
+        if link is None:
             continue
-        q[p.joint] = float(np.clip(np.asarray(d) @ (R @ np.asarray(p.axis)), p.lower, p.upper))
+        p = spec.part(link)
+        local = R.T @ np.asarray(d, dtype=float)  # the offset in this particle's cabinet
+        if p.joint_type == "prismatic":
+            v = float(local @ np.asarray(p.axis))
+        elif p.joint_type == "revolute" and p.handle_pos is not None:
+            v = swing(p, local)
+        else:
+            continue
+        q[p.joint] = float(np.clip(v, p.lower, p.upper))
     return q
+
+
+def swing(part: PartSpec, d: np.ndarray) -> float:
+    """The angle [rad] about revolute ``part``'s hinge that moves its shut handle by
+    ``d`` (3,) [m] (cabinet frame), or as near as a turn does (the turn between the
+    two handle points seen along the hinge)."""
+    a = np.asarray(part.axis, dtype=float)
+    u = np.asarray(part.handle_pos, dtype=float) - np.asarray(part.origin, dtype=float)
+    v = u + np.asarray(d, dtype=float)
+    u, v = u - (u @ a) * a, v - (v @ a) * a
+    return float(np.arctan2(a @ np.cross(u, v), u @ v))
 
 
 def unmoved(belief: ParticleBelief, prior: ParticleBelief | None) -> ParticleBelief:

@@ -79,10 +79,10 @@ def skills(
     spec_part = w.particles[holder].spec.part(part.links[holder])
     q = w.particles[holder].q.get(spec_part.joint, 0.0)
     plan_world = w.fetch(holder, root.best.get(holder))
-    if spec_part.joint_type == "prismatic":
-        # A drawer stands where the real front does (conditioning.drawn_out): it is
-        # grasped, and pulled on, from there, not from where it stood at the start (a
-        # drawer opened too little was grasped 0.13 m behind its handle).
+    if spec_part.movable:
+        # A part stands where the real front does (conditioning.as_seen): it is grasped,
+        # and moved on, from there, not from where it stood at the start (a drawer
+        # opened too little was grasped 0.13 m behind its handle).
         q = position(plan_world, spec_part.joint)
     T = cabinet_frame(plan_world.cabinet_pose(), w.pose(holder))
     grasps = handle_grasps(spec_part, q, T)

@@ -399,7 +399,7 @@ class RealEnvironment:
         out of where it is shut, by catalogued part: world (3,) [m], in the cabinet as it
         stands now. The head camera's cloud shows a front standing out of the carcass to
         about a centimetre (taken from the simulator, as the carcass's motion is);
-        :func:`.conditioning.condition` puts each particle's drawer there."""
+        :func:`.conditioning.condition` moves each particle's part there."""
         rw = self._need_real().world
         T = rw.cabinet_pose()
         out = {}
