@@ -404,11 +404,10 @@ class RealEnvironment:
         T = rw.cabinet_pose()
         out = {}
         for k, part in self._true_parts():
-            if conditioning.is_shut(rw, part) or part.handle_pos is None:
+            if conditioning.is_shut(rw, part):
                 continue
-            now = part.handle_at(position(rw, part.joint), T)
-            shut = part.handle_at(0.0, T)
-            if now is not None and shut is not None:
+            now, shut = part.handle_at(position(rw, part.joint), T), part.handle_at(0.0, T)
+            if now is not None and shut is not None:  # a part with a handle
                 out[k] = now - shut
         return out
 
