@@ -34,6 +34,9 @@ region:
   (:func:`perception.fusion.handle_shape`);
 * ``spurious_per_cabinet``: fused movable hypotheses (existence >= 0.5) that match no
   real movable part;
+* ``carcass_depth_beyond_seen_m``: over cabinets whose views see the carcass's depth,
+  the true depth less the seen one (median, 10-90 %) and the share within the belief's
+  draw (``BeliefConfig.depth_beyond_seen``);
 * ``joint_type_unseen``: the part of ``joint_type`` over fronts whose type no view can
   show (:func:`type_unseen`: closed, in a cabinet without handles); the text output
   also gives the share right where the type shows, and what a perfect perceiver would
@@ -281,6 +284,7 @@ def evaluate_cabinet(
             spurious=0,
             causes=Counter({f"no fusion: {e}": n}),
             seed=seed,
+            depth_error=None,
         )
     t_fusion = time.perf_counter() - t0
     runs = [fused]
@@ -364,6 +368,7 @@ def evaluate_cabinet(
         spurious=spurious,
         causes=causes,
         seed=seed,
+        depth_error=spec.depth - fused.front.depth if fused.front.depth_seen else None,
     )
 
 
@@ -396,6 +401,8 @@ def summarise(results: list[dict]) -> tuple[dict, dict[str, int]]:
     }
     hinge = [e for r in results for e in r["hinge"]]
     med = lambda v: float(np.median(v)) if v else float("nan")  # noqa: E731
+    depth = [r["depth_error"] for r in results if r.get("depth_error") is not None]
+    lo, hi = BeliefConfig().depth_beyond_seen
     return {
         "parts_found": {"n": rec["view_parts"], "ok": rec["view_found"]},
         "joint_type": {"n": rec["view_found"], "ok": rec["view_type_ok"]},
@@ -409,6 +416,16 @@ def summarise(results: list[dict]) -> tuple[dict, dict[str, int]]:
         },
         "handle_style": {"n": rec["handle_n"], "ok": rec["handle_ok"]},
         "spurious_per_cabinet": float(np.mean([r["spurious"] for r in results])),
+        # How much deeper the carcass is than the views see it (where they see it):
+        # BeliefConfig.depth_beyond_seen's provenance, and the share it covers.
+        "carcass_depth_beyond_seen_m": {
+            "n": len(depth),
+            "median": med(depth),
+            "p10_p90": [float(v) for v in np.percentile(depth, [10, 90])] if depth else [],
+            "within_belief_range": float(np.mean([lo <= e <= hi for e in depth]))
+            if depth
+            else float("nan"),
+        },
         "seconds_per_view": float(np.mean([s for r in results for s in r["seconds"]])),
         "seconds_fusion": float(np.mean([r["fusion"] for r in results])),
     }, dict(sum((r["causes"] for r in results), Counter()).most_common())
@@ -497,6 +514,13 @@ def main(argv: list[str] | None = None) -> int:
     print(f"true model in the belief's support (per part): {pct(out['true_in_support'])}")
     print(f"handle style right (matched parts with a handle): {pct(out['handle_style'])}")
     print(f"spurious movable hypotheses per cabinet: {out['spurious_per_cabinet']:.2f}")
+    dep = out["carcass_depth_beyond_seen_m"]
+    if dep["n"]:
+        print(
+            f"carcass depth beyond the seen [m] ({dep['n']} seen): median {dep['median']:+.3f}, "
+            f"10-90 % {dep['p10_p90'][0]:+.3f}..{dep['p10_p90'][1]:+.3f}; within the "
+            f"belief's draw: {100 * dep['within_belief_range']:.0f} %"
+        )
     total = args.views * out["seconds_per_view"] + out["seconds_fusion"]
     print(
         f"seconds per view {out['seconds_per_view']:.4f}, fusion {out['seconds_fusion']:.4f}, "
