@@ -295,7 +295,7 @@ def test_a_part_the_real_robot_sees_shut_is_shut_in_every_particle(shut_episode)
     rw.set_parts({rw.scene.cabinet_spec.part(left_open).joint: 0.1})
     real_open = rw.scene.cabinet_spec.part(left_open)
     try:
-        out = d.environment.fronts_out()
+        _, out = d.environment.fronts()
         conditioned = d.environment.condition(type(belief)(opened, belief.weights, belief.origin))
         for s in conditioned.states:
             tw = d.worlds.twins[s.origin]

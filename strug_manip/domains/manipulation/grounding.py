@@ -77,13 +77,11 @@ def skills(
         return [Place.onto(t) for t in tgts], None
     holder = root.rep(a) if holder is None else holder
     spec_part = w.particles[holder].spec.part(part.links[holder])
-    q = w.particles[holder].q.get(spec_part.joint, 0.0)
     plan_world = w.fetch(holder, root.best.get(holder))
-    if spec_part.movable:
-        # A part stands where the real front does (conditioning.as_seen): it is grasped,
-        # and moved on, from there, not from where it stood at the start (a drawer
-        # opened too little was grasped 0.13 m behind its handle).
-        q = position(plan_world, spec_part.joint)
+    # A part stands where the real front does (conditioning.as_seen): it is grasped, and
+    # moved on, from there, not from where it stood at the start (a drawer opened too
+    # little was grasped 0.13 m behind its handle).
+    q = position(plan_world, spec_part.joint)
     T = cabinet_frame(plan_world.cabinet_pose(), w.pose(holder))
     grasps = handle_grasps(spec_part, q, T)
     if a.skill in ("OpenDrawer", "OpenDoor"):

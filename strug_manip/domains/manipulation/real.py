@@ -66,7 +66,6 @@ from strug_manip.domains.manipulation.state import (
     observation_key,
 )
 from strug_manip.domains.manipulation.worlds import Timers
-from strug_manip.objects.generator import PartSpec
 from strug_manip.world.sim import CameraFrame, ManipulationWorld, WorldState
 from strug_manip.world.views import cabinet_cloud, look_poses, take_views
 
@@ -256,7 +255,7 @@ class RealEnvironment:
             return belief
         if real.still:
             belief = conditioning.unmoved(belief, self.belief)
-        shut, out = self.shut_parts(), self.fronts_out()
+        shut, out = self.fronts()
         self.belief = conditioning.condition(belief, real.world, w, model.parts, shut, out)
         if self.oracle:
             self.belief = take_over(self.belief, real.world, w)
@@ -386,37 +385,32 @@ class RealEnvironment:
         link = min(dist, key=dist.__getitem__, default=None)
         return link if link is not None and dist[link] <= within else None
 
-    def shut_parts(self) -> list[int]:
-        """The catalogued parts whose true part stands shut now
-        (:data:`~.conditioning.SHUT`): the true part whose handle, when the episode
-        began, was within :data:`~.actions.SAME_PART` of the catalogued point (none:
-        perception's part has no true counterpart there)."""
-        rw = self._need_real().world
-        return [k for k, part in self._true_parts() if conditioning.is_shut(rw, part)]
-
-    def fronts_out(self) -> dict[int, np.ndarray]:
-        """How far the true part at each catalogued part that stands open has its handle
-        out of where it is shut, by catalogued part: world (3,) [m], in the cabinet as it
-        stands now. The head camera's cloud shows a front standing out of the carcass to
-        about a centimetre (taken from the simulator, as the carcass's motion is);
+    def fronts(self) -> tuple[list[int], dict[int, np.ndarray]]:
+        """Where the true cabinet's fronts stand now, per catalogued part with a true
+        part there (the one whose handle, when the episode began, was within
+        :data:`~.actions.SAME_PART` of the catalogued point; none: perception's part has
+        no true counterpart there): the catalogued parts whose true part stands shut
+        (:data:`~.conditioning.SHUT`), and for each that stands open how far its handle
+        is out of where it is shut, world (3,) [m], in the cabinet as it stands now. The
+        head camera's cloud shows a front flush or standing out of the carcass to about
+        a centimetre (taken from the simulator, as the carcass's motion is);
         :func:`.conditioning.condition` moves each particle's part there."""
-        rw = self._need_real().world
+        real = self._need_real()
+        rw, spec = real.world, real.world.scene.cabinet_spec
         T = rw.cabinet_pose()
-        out = {}
-        for k, part in self._true_parts():
-            if conditioning.is_shut(rw, part):
+        shut, out = [], {}
+        for k in range(len(self.model.parts)):
+            link = self.real_link(k, within=SAME_PART)
+            if link is None:
                 continue
-            now, shut = part.handle_at(position(rw, part.joint), T), part.handle_at(0.0, T)
-            if now is not None and shut is not None:  # a part with a handle
-                out[k] = now - shut
-        return out
-
-    def _true_parts(self) -> list[tuple[int, PartSpec]]:
-        """(catalogued part, the true part there) for each catalogued part with a true
-        counterpart within :data:`~.actions.SAME_PART` (:meth:`real_link`)."""
-        spec = self._need_real().world.scene.cabinet_spec
-        links = [self.real_link(k, within=SAME_PART) for k in range(len(self.model.parts))]
-        return [(k, spec.part(link)) for k, link in enumerate(links) if link is not None]
+            part = spec.part(link)
+            if conditioning.is_shut(rw, part):
+                shut.append(k)
+                continue
+            now, closed = part.handle_at(position(rw, part.joint), T), part.handle_at(0.0, T)
+            if now is not None and closed is not None:  # a part with a handle
+                out[k] = now - closed
+        return shut, out
 
     # --- reports -------------------------------------------------------------------------
     def report(self) -> dict[str, Any]:
