@@ -134,11 +134,18 @@ class JointDriver:
         seconds: float,
         base_path: Sequence[np.ndarray] | None = None,
         monitor: Monitor | None = None,
+        comply: Callable[[], np.ndarray] | None = None,
     ) -> float:
         """Move torso + arm through ``path`` (each (8,)) under the timing law, in at
         least ``seconds`` [s] (longer where a speed limit needs it), the base along
-        ``base_path`` (each (3,)) if given; returns the duration used [s]."""
-        pts = timing.polyline(self.arm_cmd, path)
+        ``base_path`` (each (3,)) if given; returns the duration used [s]. ``comply``,
+        called every :data:`MONITOR_PERIOD` before the monitor, returns an offset (8,)
+        added to the torso and arm commands from then on (a hand that gives way,
+        :class:`~.compliance.HandCompliance`)."""
+        n = len(self.arm_cmd)
+        # A hand that has given way goes on from the plan's pose, the offset added.
+        offset = comply() if comply is not None else np.zeros(n)
+        pts = timing.polyline(self.arm_cmd - offset, path)
         limits = self.vmax
         if base_path is not None:  # one timing for both, so they stay in step
             pts = np.hstack([pts, timing.polyline(self.base_target, base_path)])
@@ -149,15 +156,17 @@ class JointDriver:
         vels = np.diff(np.vstack([pts[:1], cmds]), axis=0) / dt
         vels[-1] = 0.0  # the motion ends at rest
         every = max(1, round(MONITOR_PERIOD / dt))
-        n = len(self.arm_cmd)
         try:
             for k in range(len(cmds)):
-                self.arm_cmd, self.arm_vel = cmds[k, :n], vels[k, :n]
+                self.arm_cmd, self.arm_vel = cmds[k, :n] + offset, vels[k, :n]
                 if base_path is not None:
                     self.base_target, self.base_vel = cmds[k, n:], vels[k, n:]
                 self._step()
-                if monitor is not None and k % every == every - 1:
-                    monitor((k + 1) * dt)
+                if k % every == every - 1:
+                    if comply is not None:
+                        offset = comply()
+                    if monitor is not None:
+                        monitor((k + 1) * dt)
         finally:  # a monitor's stop too: the servos stop feeding the path's velocity
             # forward (a hand stopped at a door's hinge stop kept pulling at it through
             # the grip's release and twisted the cabinet 10 degrees)

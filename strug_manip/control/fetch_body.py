@@ -48,6 +48,7 @@ import numpy as np
 
 from planners.errors import ConfigError
 from strug_manip.control.cabinet_guard import CabinetGuard
+from strug_manip.control.compliance import HandCompliance
 from strug_manip.control.context import ControlContext
 from strug_manip.control.driver import MONITOR_PERIOD, JointDriver
 from strug_manip.control.executor import (
@@ -160,6 +161,10 @@ class FullRobot:
         self.n_plans = 0
         before = facts_before(self.world)
         self._guard = CabinetGuard(self.world, self.params)
+        path = self._guard.opening(plan)
+        self._compliance = (
+            None if path is None else HandCompliance(self.world, path, self.params, MONITOR_PERIOD)
+        )
         phase = "plan"
         try:
             self._plan = plan
@@ -430,8 +435,12 @@ class FullRobot:
         base_path = placement.base_paths[k]
         mon = self._line_monitor(line)
         moved = line.part_joint is not None and line.part_q is not None
+        hand = self._compliance if line.name in OPENING_LINES else None
+        comply = None if hand is None else hand.update
         try:
-            self.drv.follow(list(placement.lines[k]), seconds, base_path=base_path, monitor=mon)
+            self.drv.follow(
+                list(placement.lines[k]), seconds, base_path=base_path, monitor=mon, comply=comply
+            )
             self.drv.hold(self.params.settle_time)
             mon(0.0)
         except SkillStop as stop:

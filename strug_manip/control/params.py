@@ -154,6 +154,16 @@ class SkillParams:
             drawer opened 0.25 m stops at 74 %), and the other rules stop it. Along
             the path: a hinge or an axis a few centimetres or degrees off strains
             the hand across its path, which is no end (docs/skills.md).
+        comply_gain, comply_deadband, comply_limit: the hand of an opening on the full
+            robot gives way across its path (:class:`~.compliance.HandCompliance`) at
+            ``comply_gain`` [m/(N s)] per newton of the cabinet's force on it above
+            ``comply_deadband`` [N], up to ``comply_limit`` [m] from its plan. The gain:
+            a hinge 2 cm off parts the handle from the hand at about 1.3 cm/s (a door
+            0.3 m wide swung at ``open_speed``), which the hand follows at 7 N; the
+            deadband: the pull's own contact forces across the path (the fingers'
+            squeeze is internal); the limit: the largest hinge error perception makes
+            on episode cabinets (2.6 cm radial, 2.6 cm in depth: 3.7 cm together),
+            with room; a wrong kind of joint puts the handle much farther off.
         settle_limit: after a skill the robot holds still, before it reports, while
             the cabinet still moves (:func:`~.executor.at_rest`), up to this long [s]:
             what it reports is where the cabinet came to rest. A cabinet the stow
@@ -217,6 +227,9 @@ class SkillParams:
     end_share: float = 0.5
     end_give: float = 0.01
     end_lag: float = 0.02
+    comply_gain: float = 0.002
+    comply_deadband: float = 5.0
+    comply_limit: float = 0.05
     settle_limit: float = 2.0
     time_budget: float = 60.0
     plan_checks: int = 50_000

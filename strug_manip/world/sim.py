@@ -379,6 +379,11 @@ class ManipulationWorld:
             np.linalg.norm(self.data.xpos[self._cabinet_body][:2] - self._cabinet_start[:2])
         )
 
+    @property
+    def cabinet_root_body(self) -> int:
+        """The id of the cabinet's base body (its parts are the bodies below it)."""
+        return int(self._cabinet_body)
+
     def cabinet_pose(self) -> np.ndarray:
         """The cabinet frame now (its base's body pose), 4x4 (``scene.T_world_cabinet``
         is where it stood at reset)."""

@@ -1,0 +1,116 @@
+"""An opening's hand that gives way across its path (issue 37, part 3).
+
+The full robot opens a part along the joint the belief holds; a hinge a centimetre or
+two off (perception's, :mod:`strug_manip.domains.manipulation.belief`) makes the
+handle's arc differ from the hand's, and a stiff hand then slips off the handle
+(``grasp_lost``) or drags the cabinet. :class:`HandCompliance` is an admittance law on
+the hand's contact force: every :data:`~.driver.MONITOR_PERIOD` it reads the force the
+cabinet exerts on the hand (the Fetch's wrist as a force sensor: the contact forces
+between the hand's bodies and the cabinet's), keeps its part *across* the planned
+path (the pull along the path is the opening's work, which the hand must not yield
+to), and moves the hand along it at ``comply_gain`` metres per second per newton
+above ``comply_deadband``, up to ``comply_limit`` from the plan. The shift becomes a
+joint offset through the arm's Jacobian (damped least squares over the torso and arm,
+the hand's orientation kept), which :meth:`~.driver.JointDriver.follow` adds to the
+commands from then on.
+
+Why a cap: a wrong *kind* of joint (a drawer swung as a door, a door pulled straight)
+puts the handle tens of centimetres off the hand's path; the hand follows it no
+farther than a hinge error perception makes (:data:`~.params.SkillParams.comply_limit`),
+so such an opening still strains, slips or drags, as the belief update needs.
+"""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+
+from strug_manip.control.executor import OpeningPath
+from strug_manip.control.params import SkillParams
+from strug_manip.robot.fetch import ARM_TORSO_JOINTS, GRIPPER_SITE
+from strug_manip.world.sim import ManipulationWorld
+
+#: Damping of the least-squares step from the hand's shift to the joints' [m^2]: small
+#: beside the arm's reach, large enough near a singular posture.
+DAMPING = 1e-4
+
+
+def subtree(m: mujoco.MjModel, root: int) -> np.ndarray:
+    """The ids of body ``root`` and every body below it, (n,)."""
+    inside = np.zeros(m.nbody, dtype=bool)
+    inside[root] = True
+    for b in range(root + 1, m.nbody):  # MuJoCo numbers a body after its parent
+        inside[b] = inside[m.body_parentid[b]]
+    return np.flatnonzero(inside)
+
+
+class HandCompliance:
+    """The admittance of one opening (module docstring).
+
+    Args:
+        world: the full robot's world (its ``data`` is read, never written).
+        path: the opening's path (:meth:`.OpeningPath.of`), whose tangent says which
+            part of the force is the pull.
+        params: ``comply_gain`` [m/(N s)], ``comply_deadband`` [N], ``comply_limit`` [m].
+        period: the time between two updates [s].
+    """
+
+    def __init__(
+        self, world: ManipulationWorld, path: OpeningPath, params: SkillParams, period: float
+    ) -> None:
+        m = world.model
+        self.world, self.path, self.params, self.period = world, path, params, period
+        self.hand = np.zeros(m.nbody, dtype=bool)
+        self.hand[subtree(m, m.body("gripper_link").id)] = True
+        self.cabinet = np.zeros(m.nbody, dtype=bool)
+        self.cabinet[subtree(m, world.cabinet_root_body)] = True
+        self.site = m.site(GRIPPER_SITE).id
+        self.dofs = np.array([m.jnt_dofadr[m.joint(j).id] for j in ARM_TORSO_JOINTS])
+        self.shift = np.zeros(3)  # the hand's shift from its plan, world [m]
+        self.q_offset = np.zeros(len(ARM_TORSO_JOINTS))
+
+    def force(self) -> np.ndarray:
+        """The force the cabinet exerts on the hand now, world (3,) [N]."""
+        m, d = self.world.model, self.world.data
+        total, f6 = np.zeros(3), np.zeros(6)
+        for i in range(d.ncon):
+            c = d.contact[i]
+            b1, b2 = m.geom_bodyid[c.geom1], m.geom_bodyid[c.geom2]
+            if self.hand[b1] and self.cabinet[b2]:
+                sign = -1.0  # the force is geom1's on geom2: the hand's on the cabinet
+            elif self.cabinet[b1] and self.hand[b2]:
+                sign = 1.0
+            else:
+                continue
+            mujoco.mj_contactForce(m, d, i, f6)
+            total += sign * (c.frame.reshape(3, 3).T @ f6[:3])
+        return total
+
+    def update(self) -> np.ndarray:
+        """One step of the law; the joint offset to add to the arm's commands, (8,)."""
+        p, d = self.params, self.world.data
+        tcp = d.site_xpos[self.site]
+        f = self.force()
+        t = self.path.tangent(tcp)
+        across = f - (f @ t) * t
+        size = float(np.linalg.norm(across))
+        if size <= p.comply_deadband:
+            return self.q_offset
+        step = p.comply_gain * (size - p.comply_deadband) * self.period * across / size
+        shift = self.shift + step
+        reach = float(np.linalg.norm(shift))
+        if reach > p.comply_limit:
+            shift *= p.comply_limit / reach
+        self.q_offset = self.q_offset + self._joints(shift - self.shift)
+        self.shift = shift
+        return self.q_offset
+
+    def _joints(self, dx: np.ndarray) -> np.ndarray:
+        """The torso and arm motion (8,) that moves the hand by ``dx`` (3,) [m] and keeps
+        its orientation (damped least squares on the site's Jacobian)."""
+        m, d = self.world.model, self.world.data
+        jp, jr = np.zeros((3, m.nv)), np.zeros((3, m.nv))
+        mujoco.mj_jacSite(m, d, jp, jr, self.site)
+        J = np.vstack([jp[:, self.dofs], jr[:, self.dofs]])
+        e = np.concatenate([dx, np.zeros(3)])
+        return J.T @ np.linalg.solve(J @ J.T + DAMPING * np.eye(6), e)
