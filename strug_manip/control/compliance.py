@@ -44,6 +44,23 @@ def subtree(m: mujoco.MjModel, root: int) -> np.ndarray:
     return np.flatnonzero(inside)
 
 
+def give_way(
+    shift: np.ndarray, force: np.ndarray, tangent: np.ndarray, params: SkillParams, period: float
+) -> np.ndarray:
+    """The hand's shift from its plan (3,) [m] after ``period`` [s] more under ``force``
+    (3,) [N], the cabinet's on the hand, the path's unit ``tangent`` (3,): the part of
+    the force across the path above ``comply_deadband`` moves it at ``comply_gain``
+    [m/(N s)] per newton, up to ``comply_limit`` [m] from the plan. ``shift`` itself
+    (the same object) where the force is within the deadband."""
+    across = force - (force @ tangent) * tangent
+    size = float(np.linalg.norm(across))
+    if size <= params.comply_deadband:
+        return shift
+    out = shift + params.comply_gain * (size - params.comply_deadband) * period * across / size
+    reach = float(np.linalg.norm(out))
+    return out * (params.comply_limit / reach) if reach > params.comply_limit else out
+
+
 class HandCompliance:
     """The admittance of one opening (module docstring).
 
@@ -88,21 +105,11 @@ class HandCompliance:
 
     def update(self) -> np.ndarray:
         """One step of the law; the joint offset to add to the arm's commands, (8,)."""
-        p, d = self.params, self.world.data
-        tcp = d.site_xpos[self.site]
-        f = self.force()
-        t = self.path.tangent(tcp)
-        across = f - (f @ t) * t
-        size = float(np.linalg.norm(across))
-        if size <= p.comply_deadband:
-            return self.q_offset
-        step = p.comply_gain * (size - p.comply_deadband) * self.period * across / size
-        shift = self.shift + step
-        reach = float(np.linalg.norm(shift))
-        if reach > p.comply_limit:
-            shift *= p.comply_limit / reach
-        self.q_offset = self.q_offset + self._joints(shift - self.shift)
-        self.shift = shift
+        tcp = self.world.data.site_xpos[self.site]
+        shift = give_way(self.shift, self.force(), self.path.tangent(tcp), self.params, self.period)
+        if shift is not self.shift:
+            self.q_offset = self.q_offset + self._joints(shift - self.shift)
+            self.shift = shift
         return self.q_offset
 
     def _joints(self, dx: np.ndarray) -> np.ndarray:
