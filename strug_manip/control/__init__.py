@@ -9,7 +9,8 @@
 - :mod:`.plan`, :mod:`.placement`: a skill as gripper motions, where the base stands;
 - :mod:`.executor`: the executor core both bodies share (the stop rules, the stow, the
   outcome) and their interface (:class:`~.executor.Body`);
-- :mod:`.fetch_body`: the full robot (:class:`FullRobot`); :mod:`.twin_body`,
+- :mod:`.fetch_body`: the full robot (:class:`FullRobot`), whose opening hand gives way
+  across its path (:mod:`.compliance`); :mod:`.twin_body`,
   :mod:`.twin_program`, :mod:`.twin_rollout`, :mod:`.twin_servo`, :mod:`.rotations`:
   the planning twin (:class:`PlanningTwin`, its programs, rollouts, servo model);
 - :mod:`.ik` (its limits :mod:`.ik_limits`, its QP :mod:`.ik_qp`), :mod:`.motion`,
