@@ -25,6 +25,8 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
+from strug_manip.control.contacts import HAND_BODIES
+from strug_manip.control.driver import MONITOR_PERIOD
 from strug_manip.control.executor import OpeningPath
 from strug_manip.control.params import SkillParams
 from strug_manip.robot.fetch import ARM_TORSO_JOINTS, GRIPPER_SITE
@@ -33,15 +35,6 @@ from strug_manip.world.sim import ManipulationWorld
 #: Damping of the least-squares step from the hand's shift to the joints' [m^2]: small
 #: beside the arm's reach, large enough near a singular posture.
 DAMPING = 1e-4
-
-
-def subtree(m: mujoco.MjModel, root: int) -> np.ndarray:
-    """The ids of body ``root`` and every body below it, (n,)."""
-    inside = np.zeros(m.nbody, dtype=bool)
-    inside[root] = True
-    for b in range(root + 1, m.nbody):  # MuJoCo numbers a body after its parent
-        inside[b] = inside[m.body_parentid[b]]
-    return np.flatnonzero(inside)
 
 
 def give_way(
@@ -69,18 +62,22 @@ class HandCompliance:
         path: the opening's path (:meth:`.OpeningPath.of`), whose tangent says which
             part of the force is the pull.
         params: ``comply_gain`` [m/(N s)], ``comply_deadband`` [N], ``comply_limit`` [m].
-        period: the time between two updates [s].
+        period: the time between two updates [s] (the driver's monitor period).
     """
 
     def __init__(
-        self, world: ManipulationWorld, path: OpeningPath, params: SkillParams, period: float
+        self,
+        world: ManipulationWorld,
+        path: OpeningPath,
+        params: SkillParams,
+        period: float = MONITOR_PERIOD,
     ) -> None:
         m = world.model
         self.world, self.path, self.params, self.period = world, path, params, period
         self.hand = np.zeros(m.nbody, dtype=bool)
-        self.hand[subtree(m, m.body("gripper_link").id)] = True
-        self.cabinet = np.zeros(m.nbody, dtype=bool)
-        self.cabinet[subtree(m, world.cabinet_root_body)] = True
+        self.hand[[m.body(b).id for b in HAND_BODIES]] = True
+        # The cabinet's base is a body of the world; its parts hang below it.
+        self.cabinet = np.asarray(m.body_rootid) == world.cabinet_root_body
         self.site = m.site(GRIPPER_SITE).id
         self.dofs = np.array([m.jnt_dofadr[m.joint(j).id] for j in ARM_TORSO_JOINTS])
         self.shift = np.zeros(3)  # the hand's shift from its plan, world [m]

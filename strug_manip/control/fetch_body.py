@@ -161,10 +161,9 @@ class FullRobot:
         self.n_plans = 0
         before = facts_before(self.world)
         self._guard = CabinetGuard(self.world, self.params)
-        path = self._guard.opening(plan)
-        self._compliance = (
-            None if path is None else HandCompliance(self.world, path, self.params, MONITOR_PERIOD)
-        )
+        self._path = self._guard.opening(plan)  # None: not an opening
+        hand = None if self._path is None else HandCompliance(self.world, self._path, self.params)
+        self._comply = None if hand is None else hand.update
         phase = "plan"
         try:
             self._plan = plan
@@ -435,8 +434,7 @@ class FullRobot:
         base_path = placement.base_paths[k]
         mon = self._line_monitor(line)
         moved = line.part_joint is not None and line.part_q is not None
-        hand = self._compliance if line.name in OPENING_LINES else None
-        comply = None if hand is None else hand.update
+        comply = self._comply if line.name in OPENING_LINES else None
         try:
             self.drv.follow(
                 list(placement.lines[k]), seconds, base_path=base_path, monitor=mon, comply=comply
@@ -474,7 +472,7 @@ class FullRobot:
             tol = line.tolerance
         name = "free motion" if line is None else line.name
         guard = self._guard
-        path = guard.opening(self._plan) if name in OPENING_LINES else None
+        path = self._path if name in OPENING_LINES else None
 
         def monitor(_: float) -> None:
             if line is not None and grasp_lost(line.holding, float(d.ten_length[tendon])):
