@@ -122,7 +122,9 @@ def _cell_place(
     ``q`` still covers ``w cos q + t sin q`` of it next to its hinge; a top flap hangs
     ``h cos q + t`` down into it), resting on the floor. It comes in level midway up
     the free height (the hand as far from the top as the object from the floor's front
-    edge, up to :data:`MAX_LIFT`), except under a top flap; behind a drop-down flap it
+    edge, up to :data:`MAX_LIFT`; under a top flap, up to its hanging edge: carried in
+    at the floor, an object whose believed floor stood 1 cm low struck the cell's front
+    edge and slid the cabinet); behind a drop-down flap it
     comes in pitched down by :data:`FLAP_PITCH`
     (the wrist and forearm, out over the open flap, ride higher), :data:`CLEARANCE`
     over the flap's edge and no higher (the pitched hand's wrist rises behind the
@@ -137,7 +139,6 @@ def _cell_place(
     front, floor = center[0] + size[0] / 2, center[2] - size[2] / 2
     y_lo, y_hi = center[1] - size[1] / 2, center[1] + size[1] / 2
     top = center[2] + size[2] / 2
-    lift_ok = True
     drop = pitch = edge = 0.0
     if part.joint_type == "revolute" and part.hinge is not None:
         panel = part.geoms[0].size  # (thickness, width, height) of the door's panel
@@ -150,7 +151,6 @@ def _cell_place(
                 y_hi -= cover
         elif part.hinge == "top":
             top -= float(panel[2]) * max(np.cos(q), 0.0) + t
-            lift_ok = False
         else:  # a drop-down flap: the wrist, out over it, must stay above its panel
             drop, pitch = FLAP_DROP, FLAP_PITCH
             edge = float(panel[2]) * max(np.cos(q), 0.0) + t  # its edge above the floor
@@ -167,7 +167,7 @@ def _cell_place(
             f"free width, free height) at joint position {q:.3f}: the object carried in "
             f"needs {need[0]:.3f} x {need[1]:.3f} x {need[2]:.3f} m"
         )
-    highest = float(np.clip(height - held - CLEARANCE, 0.0, MAX_LIFT)) if lift_ok else 0.0
+    highest = float(np.clip(height - held - CLEARANCE, 0.0, MAX_LIFT))
     if pitch and highest + drop < edge + CLEARANCE:
         raise ConfigError(
             f"flap {link} at {q:.3f} rad stands {edge:.3f} m over its cell's floor: the "
@@ -208,7 +208,8 @@ def place_targets(
     along the pull) allow, with :data:`CLEARANCE`: the wrist and forearm above it then
     stay farther from the fronts and handles of the drawers above (a low drawer, out
     only 15-20 cm, leaves the hand little room in front of them). Each is lowered into
-    from above the box's walls (:data:`ABOVE_WALLS`), then, where that is out of reach,
+    from above the drawer's front where it stands higher than the walls, then from above
+    the box's walls (:data:`ABOVE_WALLS` over each), then, where that is out of reach,
     from ``place_clearance`` (lift 0), then from just over the walls
     (:data:`SKIM_OVER`); last, in a box deep enough, each is let go :data:`DROPS` above
     the floor. A cell has one.
@@ -247,9 +248,12 @@ def place_targets(
     xs = [middle] + ([near_wall] if near_wall > middle + 1e-3 else [])
     walls = float(size[2])
     over = walls + ABOVE_WALLS
+    rim = _rim(part) - (center[2] - size[2] / 2)  # the front's top over the floor
     # (raise over the resting place [m], lift over the release [m], skim) in the order
-    # to try: over the walls; else as reach allows; else skimming them; else dropped.
-    starts = [(0.0, over, False), (0.0, 0.0, False)]
+    # to try: over the front; else over the walls; else as reach allows; else skimming
+    # the walls; else dropped.
+    starts = [(0.0, rim + ABOVE_WALLS, False)] if rim > walls + 1e-3 else []
+    starts += [(0.0, over, False), (0.0, 0.0, False)]
     starts += [(0.0, walls + o, True) for o in SKIM_OVER]
     starts += [(r, over - r, False) for r in DROPS
                if r + 2 * half[2] <= walls - DROP_BELOW_WALLS]  # fmt: skip
@@ -258,6 +262,20 @@ def place_targets(
         for r, lift, skim in starts
         for x in xs
     )
+
+
+def _rim(part: PartSpec) -> float:
+    """Height of the part's highest board [m], object frame, part closed: a drawer's
+    front often stands higher than its box's walls (7 cm on generator seed 3021), and
+    an object carried in just over the walls came over the front a centimetre or two
+    over its top edge; a believed cabinet 1 cm low put the object on it, and the
+    cabinet slid (``tools/eval_place_offset.py``)."""
+    tops = [
+        part.origin[2] + g.pos[2] + g.size[2] / 2
+        for g in part.geoms
+        if g.shape == "box" and not g.name.startswith("handle")
+    ]
+    return float(max(tops, default=-np.inf))
 
 
 def _target(
