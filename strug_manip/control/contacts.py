@@ -112,8 +112,9 @@ class ContactChecker:
         # Bodies whose contacts count: the robot's, and an attached body.
         self._counts = self.robot.copy()
         self._attached: tuple[int, int, np.ndarray] | None = None  # body, qpos adr, T_g_b
-        # Geom pairs that count only where they touch (not within a margin), either order.
-        self._excused = np.zeros((m.ngeom, m.ngeom), dtype=bool)
+        # Geom pairs that count only nearer than their own distance [m] (not within the
+        # margin), either order; NaN: not excused.
+        self._excused = np.full((m.ngeom, m.ngeom), np.nan)
 
     def body_id(self, name: str) -> int:
         """Id of the body ``name``; raises :class:`UnknownNameError`."""
@@ -231,14 +232,21 @@ class ContactChecker:
         self.model.geom_margin[geoms] = np.maximum(distance, self._margin0[geoms])
         self.model.body_margin[ids] = np.maximum(distance, self._body_margin0[ids])
 
-    def excuse(self, pairs: Iterable[tuple[int, int]] = ()) -> ContactChecker:
+    def excuse(
+        self, pairs: Iterable[tuple[int, int]] = (), within: Iterable[float] | None = None
+    ) -> ContactChecker:
         """Replace the excused geom pairs (ids, either order; e.g. :meth:`geom_pairs`):
-        they count only where they touch, not within a margin (:meth:`keep_clear_of`,
-        :meth:`keep_clear`). Geoms, not bodies: a hand near a drawer's side wall where
-        a motion ends is no reason to let it graze the drawer's front on the way."""
-        self._excused[:] = False
-        for a, b in pairs:
-            self._excused[a, b] = self._excused[b, a] = True
+        each counts only nearer than its ``within`` [m] (default 0: where they touch),
+        not within a margin (:meth:`keep_clear_of`, :meth:`keep_clear`). Geoms, not
+        bodies: a hand near a drawer's side wall where a motion ends is no reason to let
+        it graze the drawer's front on the way."""
+        self._excused[:] = np.nan
+        pairs = list(pairs)
+        floors = [0.0] * len(pairs) if within is None else list(within)
+        if len(floors) != len(pairs):
+            raise ConfigError(f"excuse: {len(pairs)} pairs but {len(floors)} distances")
+        for (a, b), f in zip(pairs, floors, strict=True):
+            self._excused[a, b] = self._excused[b, a] = max(float(f), 0.0)
         return self
 
     def _detach(self) -> None:
@@ -287,22 +295,36 @@ class ContactChecker:
         return self._forbidden()
 
     def _forbidden(self, with_geoms: bool = False) -> np.ndarray:
+        bad = self._forbidden_mask()
+        if with_geoms:
+            return self.data.contact.geom[bad]
+        return self.geom_body[self.data.contact.geom][bad]
+
+    def _forbidden_mask(self) -> np.ndarray:
+        """Which of the scratch data's contacts are forbidden, (ncon,) bool."""
         bodies = self.geom_body[self.data.contact.geom]
         a, b = bodies[:, 0], bodies[:, 1]
         # (The model's bits leave out the scene's contacts among themselves, except
         # an explicit <pair>: the robot test stays.)
         bad = (self._counts[a] | self._counts[b]) & ~self._allowed[a, b]
         geoms = self.data.contact.geom
-        excused = self._excused[geoms[:, 0], geoms[:, 1]]
-        if excused.any():  # within a margin but not touching
-            bad &= ~(excused & (self.data.contact.dist >= 0.0))
-        return bodies[bad] if not with_geoms else geoms[bad]
+        floor = self._excused[geoms[:, 0], geoms[:, 1]]
+        excused = ~np.isnan(floor)
+        if excused.any():  # within a margin but no nearer than excused
+            bad &= ~(excused & (self.data.contact.dist >= np.nan_to_num(floor)))
+        return bad
 
     def geom_pairs(self, q: np.ndarray) -> np.ndarray:
         """Forbidden contacts at ``q`` as geom ids, (k, 2)."""
+        return self.geom_gaps(q)[0]
+
+    def geom_gaps(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Forbidden contacts at ``q``: geom ids (k, 2) and their distances (k,) [m]
+        (negative: penetrating; a pair may come more than once)."""
         if self._collide(q) == 0:
-            return np.zeros((0, 2), dtype=int)
-        return self._forbidden(with_geoms=True)
+            return np.zeros((0, 2), dtype=int), np.zeros(0)
+        bad = self._forbidden_mask()
+        return self.data.contact.geom[bad], self.data.contact.dist[bad]
 
     def hand_in_scene(self, pairs: np.ndarray) -> bool:
         """Some pair of ``pairs`` (k, 2) (:meth:`pairs`) is the hand against the scene:

@@ -55,6 +55,10 @@ TUCKED_TOLERANCE = 0.15
 #: A cabinet at rest: every joint of it (the parts, the base's free joint) slower than
 #: this [m/s or rad/s] (a drawer of a tilted cabinet creeping out moves 0.02 m/s).
 REST_SPEED = 0.005
+#: A pair of geoms near where a free motion starts or ends may come this much nearer
+#: on the way than it is there [m] (:func:`keeping_clear`): the validity checks along
+#: a path's edges see the pair a few millimetres apart from where the ends do.
+EXCUSE_SLACK = 0.005
 
 
 class Body(Protocol):
@@ -363,24 +367,31 @@ def keeping_clear(
     (:func:`scene_bodies`) from ``free_clearance`` apart, and an attached object's with
     anything from ``held`` [m] apart (:meth:`~.contacts.ContactChecker.keep_clear`),
     except the pairs of geoms already that near where the motion starts or ends (torso
-    + arm ``ends``, each (8,), the base at ``base`` (3,)): those count where they
-    touch. Afterwards the plain check is back.
+    + arm ``ends``, each (8,), the base at ``base`` (3,)): those count only nearer
+    than they are there (less :data:`EXCUSE_SLACK`), so the path keeps what room the
+    ends leave. Afterwards the plain check is back.
 
     Why: free motions are planned touching-free and the arm follows them a few
     centimetres off (it lags its command, and the checks along an edge are 4 cm
     apart at the gripper), so a plan that grazes a part pushed it: an elbow swept an
     open drawer on the stow after a Place and slid the cabinet, a wrist knocked a
     drawer shut on the way to place into it. The tables count too: an arm kept clear
-    of the cabinet alone stowed along the table under it and caught on its edge.
+    of the cabinet alone stowed along the table under it and caught on its edge. A
+    pair near where the motion ends was let touch all the way: a carried object
+    grazed the edge of a door open beside its cell and slid the cabinet (OpenDoor
+    episode 9846; ``tools/eval_place_offset.py``).
     """
     bodies = scene_bodies(checker)
     checker.keep_clear_of(bodies, params.free_clearance)
     if held > 0.0:
         checker.keep_clear(held)
-    near = set()
+    near: dict[tuple[int, int], float] = {}
     for q in ends:
-        near |= {(int(a), int(b)) for a, b in checker.geom_pairs(np.r_[base, q]).tolist()}
-    checker.excuse(near)
+        pairs, gaps = checker.geom_gaps(np.r_[base, q])
+        for (a, b), gap in zip(pairs.tolist(), gaps.tolist(), strict=True):
+            key = (min(a, b), max(a, b))
+            near[key] = min(near.get(key, np.inf), gap - EXCUSE_SLACK)
+    checker.excuse(near.keys(), near.values())
     try:
         yield
     finally:
