@@ -25,6 +25,7 @@ A change to a rule is made here, and both bodies follow it.
 from __future__ import annotations
 
 import contextlib
+import functools
 import time
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
@@ -291,8 +292,8 @@ def plan_stow(
         ) -> MotionPlan:
             return _plan(planner, start, goal, validity, checks, params.plan_wall_cap, seed)
 
-        def clear(start: np.ndarray = start) -> contextlib.AbstractContextManager[None]:
-            return keeping_clear(checker, base, (start, goal), params, held)
+        def clear(room: bool, start: np.ndarray = start) -> contextlib.AbstractContextManager[None]:
+            return keeping_clear(checker, base, (start, goal), params, held, room)
 
         res = clear_first(planners, run, clear, params)
         if res.success:
@@ -304,16 +305,24 @@ def plan_stow(
 def clear_first(
     planners: Sequence[ArmMotionPlanner],
     run: Callable[[int, ArmMotionPlanner, int], MotionPlan],
-    clear: Callable[[], contextlib.AbstractContextManager[None]],
+    clear: Callable[[bool], contextlib.AbstractContextManager[None]],
     params: SkillParams,
 ) -> MotionPlan:
     """The first plan found by ``run(i, planner, checks)`` (the ``i``-th of
     ``planners``, its budget ``checks`` validity checks): each planner in turn inside
-    ``clear()`` (e.g. :func:`keeping_clear`), its budget capped at ``clear_checks``,
-    then each in turn again with the plain check and its full budget; a planner's turn
-    ends the round when it succeeds or fails for another reason than its budget."""
+    ``clear(True)`` (e.g. :func:`keeping_clear`, keeping the room the ends leave), then
+    inside ``clear(False)`` (what is near the ends may touch), each round's budget
+    capped at ``clear_checks``, then each in turn again with the plain check and its
+    full budget; a planner's turn ends the round when it succeeds or fails for another
+    reason than its budget."""
     res = None
-    for keep, cap in ((clear, params.clear_checks), (contextlib.nullcontext, None)):
+    rounds: tuple[tuple[Callable[[], contextlib.AbstractContextManager[None]], int | None], ...]
+    rounds = (
+        (functools.partial(clear, True), params.clear_checks),
+        (functools.partial(clear, False), params.clear_checks),
+        (contextlib.nullcontext, None),
+    )
+    for keep, cap in rounds:
         with keep():
             for i, planner in enumerate(planners):
                 checks = params.planner_checks(i, len(planners))
@@ -362,6 +371,7 @@ def keeping_clear(
     ends: Sequence[np.ndarray],
     params: SkillParams,
     held: float = 0.0,
+    room: bool = True,
 ) -> Iterator[None]:
     """Within the block, ``checker`` counts the robot's contacts with the scene
     (:func:`scene_bodies`) from ``free_clearance`` apart, and an attached object's with
@@ -369,7 +379,8 @@ def keeping_clear(
     except the pairs of geoms already that near where the motion starts or ends (torso
     + arm ``ends``, each (8,), the base at ``base`` (3,)): those count only nearer
     than they are there (less :data:`EXCUSE_SLACK`), so the path keeps what room the
-    ends leave. Afterwards the plain check is back.
+    ends leave (``room``; else only where they touch). Afterwards the plain check is
+    back.
 
     Why: free motions are planned touching-free and the arm follows them a few
     centimetres off (it lags its command, and the checks along an edge are 4 cm
@@ -390,7 +401,7 @@ def keeping_clear(
         pairs, gaps = checker.geom_gaps(np.r_[base, q])
         for (a, b), gap in zip(pairs.tolist(), gaps.tolist(), strict=True):
             key = (min(a, b), max(a, b))
-            near[key] = min(near.get(key, np.inf), gap - EXCUSE_SLACK)
+            near[key] = min(near.get(key, np.inf), gap - EXCUSE_SLACK if room else 0.0)
     checker.excuse(near.keys(), near.values())
     try:
         yield

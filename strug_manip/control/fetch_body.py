@@ -308,9 +308,9 @@ class FullRobot:
         def run(i: int, planner: ArmMotionPlanner, checks: int) -> MotionPlan:
             return self._arm_plan(planner, q_from, q_to, validity, checks)
 
-        def clear() -> contextlib.AbstractContextManager[None]:
+        def clear(room: bool) -> contextlib.AbstractContextManager[None]:
             ends = (q_from, q_to)
-            return keeping_clear(checker, validity.base, ends, self.params, held)
+            return keeping_clear(checker, validity.base, ends, self.params, held, room)
 
         plan = clear_first(planners, run, clear, self.params)
         self.plan_seconds += time.perf_counter() - t
