@@ -245,9 +245,22 @@ def test_scene_bodies_kept_clear_count_the_robot_from_a_distance_unless_excused(
             checker.model.body(int(b)).name.startswith("cabinet/")
             for b in hits.ravel() if not checker.robot[int(b)]
         )  # fmt: skip
-        checker.excuse([tuple(p) for p in checker.geom_pairs(near).tolist()])
+        gaps = checker.geom_gaps(near)  # the pairs within the margin, their distances
+        pairs = [tuple(p) for p in checker.geom_pairs(near).tolist()]
+        checker.excuse(pairs)
         assert checker.free(near)  # within the margin, excused
         assert not checker.free(arm_at(ik, (x + 0.01, 0.0, 1.06)))  # touching still counts
+        # Excused down to the distance it has at `near` less 5 mm: 3 mm nearer is free,
+        # 8 mm nearer is not (yet touches nothing).
+        within = [float(gaps[1][(gaps[0] == p).all(axis=1)].min()) - 0.005 for p in pairs]
+        checker.excuse(pairs, within)
+        assert checker.free(arm_at(ik, (x - 0.007, 0.0, 1.06)))
+        assert not checker.free(arm_at(ik, (x - 0.002, 0.0, 1.06)))
+        checker.keep_clear_of(cabinet, 0.0)
+        assert checker.free(arm_at(ik, (x - 0.002, 0.0, 1.06)))
+        checker.keep_clear_of(cabinet, 0.02)
+        with pytest.raises(ConfigError, match="2 distances"):
+            checker.excuse(pairs, [0.0, 0.0] if len(pairs) != 2 else [0.0] * 3)
         checker.excuse()
         assert not checker.free(near)
     finally:

@@ -176,16 +176,20 @@ def test_place_targets_are_inside_and_open_enough_is_the_targets_rule(cabinets) 
 def test_a_drawer_offers_a_second_place_nearer_its_front_wall(cabinets) -> None:
     """The second target of an open drawer keeps the object inside, CLEARANCE from the
     front wall (farther from the fronts above); both are lowered into from ABOVE_WALLS
-    over the box's walls, then again from place_clearance (lift 0), then skimming the
+    over the drawer's front where it stands over the walls, then from ABOVE_WALLS over
+    the box's walls, then again from place_clearance (lift 0), then skimming the
     walls (their own test); a cell offers one target."""
-    from strug_manip.control.targets import ABOVE_WALLS
+    from strug_manip.control.targets import ABOVE_WALLS, rim
 
     spec, T = cabinets["drawers_11"], np.eye(4)
     part = spec.part("link_1")
     q = 0.9 * part.upper
-    first, second, *low = place_targets(spec, "link_1", q, T)[:4]
+    high, low_front, first, second, *low = place_targets(spec, "link_1", q, T)[:6]
     walls = part.point_at(part.interior_center, q)[2] + part.interior_size[2] / 2
     bottom = first.p[2, 3] - OBJECT_HALF_SIZE[2]
+    assert rim(part) > walls + 0.01  # this drawer's front stands over its box
+    assert high.lift == low_front.lift == pytest.approx(rim(part) + ABOVE_WALLS - bottom)
+    assert [high.p.tobytes(), low_front.p.tobytes()] == [first.p.tobytes(), second.p.tobytes()]
     assert first.lift == second.lift == pytest.approx(walls + ABOVE_WALLS - bottom)
     assert [t.lift for t in low] == [0.0, 0.0]
     assert not any(t.skim for t in (first, second, *low))
@@ -207,9 +211,10 @@ def test_a_drawer_out_of_reach_from_above_is_skimmed_then_dropped_into() -> None
     """After the targets lowered from high up, a drawer's places follow lowered from
     just over its walls (SKIM_OVER, ``skim``: from exactly that height); a deep box adds
     its places let go DROPS above the floor, the object's top DROP_BELOW_WALLS or more
-    under the walls' top, lowered into from as high as the first; a shallower box adds
+    under the walls' top, lowered into from as high as the first over the walls; a
+    shallower box adds
     fewer or none; every target's object centre is inside the drawer."""
-    from strug_manip.control.targets import DROP_BELOW_WALLS, DROPS, SKIM_OVER
+    from strug_manip.control.targets import DROP_BELOW_WALLS, DROPS, SKIM_OVER, rim
 
     spec, T = generate_cabinet(88, kinds=("drawer",)), np.eye(4)  # 8.5 to 29 cm deep
     h = 2 * OBJECT_HALF_SIZE[2]
@@ -220,12 +225,13 @@ def test_a_drawer_out_of_reach_from_above_is_skimmed_then_dropped_into() -> None
         n = 2 if targets[1].p[0, 3] > targets[0].p[0, 3] else 1  # places per height
         walls = float(part.interior_size[2])
         floor = part.point_at(part.interior_center, q)[2] - walls / 2
-        skims = targets[2 * n : (2 + len(SKIM_OVER)) * n]
+        high = 3 if rim(part) - floor > walls + 1e-3 else 2  # over the front, the walls, 0
+        skims = targets[high * n : (high + len(SKIM_OVER)) * n]
         assert [t.skim for t in skims] == [True] * len(skims)
         assert [t.lift for t in skims] == pytest.approx(
             [walls + o for o in SKIM_OVER for _ in range(n)]
         )
-        drops = targets[(2 + len(SKIM_OVER)) * n :]
+        drops = targets[(high + len(SKIM_OVER)) * n :]
         deep = [r for r in DROPS if r + h <= walls - DROP_BELOW_WALLS]
         assert len(drops) == len(deep) * n
         added.append(len(deep))
@@ -233,7 +239,8 @@ def test_a_drawer_out_of_reach_from_above_is_skimmed_then_dropped_into() -> None
             assert not t.skim
             assert t.p[2, 3] - OBJECT_HALF_SIZE[2] == pytest.approx(floor + deep[k // n])
             start = t.p[2, 3] + t.lift
-            assert start == pytest.approx(targets[0].p[2, 3] + targets[0].lift)
+            walls_first = targets[(high - 2) * n]  # lowered from ABOVE_WALLS over them
+            assert start == pytest.approx(walls_first.p[2, 3] + walls_first.lift)
         for t in targets:
             assert inside(spec, part.link, q, T, t.p)
     assert min(added) == 0 and max(added) == len(DROPS), added
@@ -284,3 +291,30 @@ def test_behind_a_drop_down_flap_the_object_comes_in_just_over_its_edge() -> Non
         assert t.lift == pytest.approx(max(edge + CLEARANCE - FLAP_DROP, 0.0))
         fitted += 1
     assert fitted > 0 and low > 0
+
+
+def test_under_a_top_flap_the_object_comes_in_lifted_below_its_edge() -> None:
+    """Under a lift-up flap open near its limit the object is carried in lifted over the
+    floor (a believed floor a centimetre low no longer puts it on the cell's front
+    edge), the palm CLEARANCE or more below the flap's hanging edge."""
+    flaps = [
+        (spec, p)
+        for s in range(3000, 3040)
+        for spec in [generate_cabinet(s, kinds=("door",))]
+        for p in spec.parts
+        if p.hinge == "top"
+    ]
+    lifted = 0
+    for spec, part in flaps:
+        q = part.upper - 0.05
+        try:
+            t = place_target(spec, part.link, q, np.eye(4))
+        except ConfigError:
+            continue  # too low a cell for the object under this flap
+        thickness, _, height = part.geoms[0].size
+        top = part.interior_center[2] + part.interior_size[2] / 2
+        edge = top - height * max(np.cos(q), 0.0) - thickness
+        palm = t.p[2, 3] - OBJECT_HALF_SIZE[2] + t.lift + HELD_HEIGHT
+        assert palm <= edge - CLEARANCE + 1e-9
+        lifted += t.lift > CLEARANCE
+    assert len(flaps) >= 5 and lifted >= len(flaps) // 2, (len(flaps), lifted)

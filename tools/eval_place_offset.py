@@ -40,8 +40,8 @@ from strug_manip.experiments.seeds import seed_range
 from strug_manip.world.scene import SceneConfig
 from strug_manip.world.sim import ManipulationWorld
 
-#: (name, (dx, dy, dz)): the believed cabinet moved by this in the world [m]: x toward
-#: the robot (its front nearer), y to the robot's left, z up.
+#: (name, (dx, dy, dz)): the believed cabinet moved by this in the world [m]: x away
+#: from the robot (which faces +x), y to the robot's left, z up.
 VARIANTS: tuple[tuple[str, tuple[float, float, float]], ...] = (
     ("true", (0.0, 0.0, 0.0)),
     ("down 1 cm", (0.0, 0.0, -0.01)),
@@ -50,8 +50,8 @@ VARIANTS: tuple[tuple[str, tuple[float, float, float]], ...] = (
     ("up 2 cm", (0.0, 0.0, 0.02)),
     ("left 1.5 cm", (0.0, 0.015, 0.0)),
     ("right 1.5 cm", (0.0, -0.015, 0.0)),
-    ("nearer 2 cm", (0.02, 0.0, 0.0)),
-    ("farther 2 cm", (-0.02, 0.0, 0.0)),
+    ("nearer 2 cm", (-0.02, 0.0, 0.0)),
+    ("farther 2 cm", (0.02, 0.0, 0.0)),
 )
 
 
@@ -61,7 +61,7 @@ def believed_world(config: SceneConfig, shift: tuple[float, float, float]) -> Ma
     dx, dy, dz = shift
     moved = dataclasses.replace(
         config,
-        cabinet_distance=config.cabinet_distance - dx,
+        cabinet_distance=config.cabinet_distance + dx,
         cabinet_lateral=config.cabinet_lateral + dy,
         stand_height=config.stand_height + dz,
     )
@@ -120,12 +120,15 @@ def evaluate_part(world, config: SceneConfig, part, ctx, params: SkillParams) ->
     return {"part": part.link, "kind": part.kind, "hinge": part.hinge, "pick": "ok", "runs": runs}
 
 
+#: The scenes of a generator seed: its drawers-only and its doors-only cabinet.
+KINDS = ("drawer", "door")
+
+
 def evaluate_seed(seed: int, ctx: ControlContext) -> dict:
-    """Every variant on every handled part of seed ``seed``'s drawers-only and
-    doors-only scenes."""
+    """Every variant on every handled part of seed ``seed``'s scenes (:data:`KINDS`)."""
     params = SkillParams()
     parts = []
-    for kind in ("drawer", "door"):
+    for kind in KINDS:
         config = SceneConfig(cabinet_seed=seed, cabinet_kinds=(kind,))
         world = ManipulationWorld(config)
         for part in world.scene.cabinet_spec.movable_parts:

@@ -248,11 +248,11 @@ def place_targets(
     xs = [middle] + ([near_wall] if near_wall > middle + 1e-3 else [])
     walls = float(size[2])
     over = walls + ABOVE_WALLS
-    rim = _rim(part) - (center[2] - size[2] / 2)  # the front's top over the floor
+    front = rim(part) - (center[2] - size[2] / 2)  # the front's top over the floor
     # (raise over the resting place [m], lift over the release [m], skim) in the order
     # to try: over the front; else over the walls; else as reach allows; else skimming
     # the walls; else dropped.
-    starts = [(0.0, rim + ABOVE_WALLS, False)] if rim > walls + 1e-3 else []
+    starts = [(0.0, front + ABOVE_WALLS, False)] if front > walls + 1e-3 else []
     starts += [(0.0, over, False), (0.0, 0.0, False)]
     starts += [(0.0, walls + o, True) for o in SKIM_OVER]
     starts += [(r, over - r, False) for r in DROPS
@@ -264,7 +264,7 @@ def place_targets(
     )
 
 
-def _rim(part: PartSpec) -> float:
+def rim(part: PartSpec) -> float:
     """Height of the part's highest board [m], object frame, part closed: a drawer's
     front often stands higher than its box's walls (7 cm on generator seed 3021), and
     an object carried in just over the walls came over the front a centimetre or two
