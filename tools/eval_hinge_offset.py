@@ -21,18 +21,15 @@ skips the seeds already there.
 
 from __future__ import annotations
 
-import argparse
-import json
+import functools
 import sys
 from collections import Counter
-from pathlib import Path
 
 import numpy as np
-from tqdm import tqdm
 
 from strug_manip.control import ControlContext, OpenDoor, SkillParams, Status, handle_grasps
 from strug_manip.domains.manipulation.rules import dragged, open_enough
-from strug_manip.experiments.seeds import seed_range
+from strug_manip.experiments.seeds import seed_tool
 from strug_manip.geometry import axis_angle
 from strug_manip.objects.hypotheses import BelievedJoint
 from strug_manip.world.scene import SceneConfig
@@ -126,34 +123,9 @@ def table(rows: list[dict]) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--seeds", type=seed_range, required=True, help="A:B, generator seeds")
-    ap.add_argument("--out", type=Path, default=None, help="results folder (resumable)")
-    ap.add_argument("--json", action="store_true", help="print the rows as JSON")
-    args = ap.parse_args(argv)
-    done: dict[int, dict] = {}
-    if args.out is not None:
-        args.out.mkdir(parents=True, exist_ok=True)
-        path = args.out / "results.jsonl"
-        if path.exists():
-            done = {r["seed"]: r for r in map(json.loads, path.read_text().splitlines())}
-    ctx = ControlContext()
-    rows = []
-    for seed in tqdm(args.seeds, desc="eval_hinge_offset", unit="cabinet"):
-        if seed in done:
-            rows.append(done[seed])
-            continue
-        row = evaluate_seed(seed, ctx)
-        rows.append(row)
-        if args.out is not None:
-            with (args.out / "results.jsonl").open("a") as f:
-                f.write(json.dumps(row) + "\n")
-    if args.json:
-        print(json.dumps(rows))
-    else:
-        print(f"door openings against hinge errors, seeds {args.seeds.start}:{args.seeds.stop}")
-        print(table(rows))
-    return 0
+    evaluate = functools.partial(evaluate_seed, ctx=ControlContext())
+    title = "door openings against hinge errors"
+    return seed_tool(argv, __doc__.split("\n")[0], evaluate, table, title)
 
 
 if __name__ == "__main__":

@@ -1,8 +1,15 @@
-"""The ``--seeds START:STOP`` argument of the evaluation and benchmark tools."""
+"""The ``--seeds START:STOP`` argument of the evaluation and benchmark tools, and their
+resumable runs over it (:func:`rows_per_seed`)."""
 
 from __future__ import annotations
 
 import argparse
+import json
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from tqdm import tqdm
 
 
 def seed_range(text: str, below: int | None = None) -> range:
@@ -43,3 +50,57 @@ def training_seeds(text: str) -> range:
             f"training seeds start at {TRAIN_SEED_START:,}, got {text!r}"
         )
     return seeds
+
+
+def rows_per_seed(
+    seeds: range,
+    evaluate: Callable[[int], dict[str, Any]],
+    out: Path | None = None,
+    desc: str = "seeds",
+) -> list[dict[str, Any]]:
+    """``evaluate(seed)`` for every seed of ``seeds``, in order, with a progress bar;
+    each row (a JSON-able dict with its ``seed``) is appended to ``out/results.jsonl``
+    as it is made, and a rerun with the same ``out`` reads the seeds already there
+    instead of evaluating them again (the tools' resumable runs)."""
+    done: dict[int, dict[str, Any]] = {}
+    path = None
+    if out is not None:
+        out.mkdir(parents=True, exist_ok=True)
+        path = out / "results.jsonl"
+        if path.exists():
+            done = {r["seed"]: r for r in map(json.loads, path.read_text().splitlines())}
+    rows = []
+    for seed in tqdm(seeds, desc=desc, unit="seed"):
+        if seed in done:
+            rows.append(done[seed])
+            continue
+        row = evaluate(seed)
+        rows.append(row)
+        if path is not None:
+            with path.open("a") as f:
+                f.write(json.dumps(row) + "\n")
+    return rows
+
+
+def seed_tool(
+    argv: list[str] | None,
+    description: str,
+    evaluate: Callable[[int], dict[str, Any]],
+    table: Callable[[list[dict[str, Any]]], str],
+    title: str,
+) -> int:
+    """A per-seed evaluation tool's command line: ``--seeds A:B`` (generator seeds),
+    ``--out DIR`` (resumable, :func:`rows_per_seed`), ``--json`` (print the rows);
+    else ``title`` with the seeds and ``table(rows)``. Returns the exit status (0)."""
+    ap = argparse.ArgumentParser(description=description)
+    ap.add_argument("--seeds", type=seed_range, required=True, help="A:B, generator seeds")
+    ap.add_argument("--out", type=Path, default=None, help="results folder (resumable)")
+    ap.add_argument("--json", action="store_true", help="print the rows as JSON")
+    args = ap.parse_args(argv)
+    rows = rows_per_seed(args.seeds, evaluate, args.out, ap.prog)
+    if args.json:
+        print(json.dumps(rows))
+    else:
+        print(f"{title}, seeds {args.seeds.start}:{args.seeds.stop}")
+        print(table(rows))
+    return 0
