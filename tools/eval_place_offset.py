@@ -85,11 +85,14 @@ def place_once(world, pw, link: str, q: float, ctx) -> dict:
     T_now = world.cabinet_pose()
     q_now = world.part_positions()[name]
     placed = inside(spec, link, q_now, T_now, world.object_pose()) and not out.holding
-    moved_away = dragged(world.cabinet_displacement())
-    ok = out.ok and placed and not moved_away
-    cause = "ok" if ok else str(out.status) if not out.ok else "dragged" if moved_away else ""
-    cause = cause or "outside"
-    return {"ok": bool(ok), "cause": cause, "cabinet": world.cabinet_displacement()}
+    displacement = world.cabinet_displacement()
+    if not out.ok:
+        cause = str(out.status)
+    elif dragged(displacement):
+        cause = "dragged"
+    else:
+        cause = "ok" if placed else "outside"
+    return {"ok": cause == "ok", "cause": cause, "cabinet": displacement}
 
 
 def evaluate_part(world, config: SceneConfig, part, ctx, params: SkillParams) -> dict | None:
