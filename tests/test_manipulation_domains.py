@@ -16,12 +16,12 @@ from planners.pomdp import Step
 from planners.solvers import SOLVERS, make_solver
 from strug_manip.domains import MANIPULATION_DOMAINS, make_domain
 from strug_manip.domains.manipulation import episode_setup
-from strug_manip.domains.manipulation.actions import SAME_PART, TABLE, ManipAction, part_kind
+from strug_manip.domains.manipulation.actions import TABLE, ManipAction, part_kind
 from strug_manip.domains.manipulation.catalogue import representatives
 from strug_manip.domains.manipulation.conditioning import swing
 from strug_manip.domains.manipulation.grounding import cabinet_frame, handle_point
 from strug_manip.domains.manipulation.health import status_of
-from strug_manip.domains.manipulation.real import REAL_PLAN_MODELS
+from strug_manip.domains.manipulation.real import MATCH_RADIUS, REAL_PLAN_MODELS
 from strug_manip.domains.manipulation.rules import BEFORE_MOTION, REPEATS_ITSELF, UNCHANGED
 from strug_manip.domains.manipulation.state import (
     ManipObservation,
@@ -99,9 +99,8 @@ def drawer_episode():
     d.close()
 
 
-#: A cabinet whose catalogued parts perception places within SAME_PART of two real
-#: parts or more (on cabinet 11 the weights of issue 39 place one: its handle points
-#: are 6-7 cm off, a known limit of the matching, docs/status.md).
+#: A cabinet with two catalogued parts or more that have a true counterpart
+#: (:meth:`RealEnvironment.counterpart`).
 SHUT_SEED = 12
 
 
@@ -270,6 +269,28 @@ def test_an_opening_grasps_where_the_dragged_cabinet_stands(drawer_episode):
     assert cabinet_frame(T_now, T_reset) is T_now
 
 
+def test_a_catalogued_part_stands_for_the_true_part_nearest_it_both_ways(shut_episode, monkeypatch):
+    """A true part is the counterpart of the catalogued part nearest its handle, up to
+    MATCH_RADIUS away (a bar's handle named 6-12 cm from the bar's centre), not of a
+    second catalogued part farther from it, and of none beyond MATCH_RADIUS."""
+    d, _, _ = shut_episode
+    env, handles = d.environment, d.real.handles
+    points = np.array([p.point for p in d.parts])
+    k, link = next((k, v) for k in range(len(d.parts)) if (v := env.counterpart(k)) is not None)
+    others = np.delete(points, k, axis=0)
+    away = points[k] - others[np.argmin(np.linalg.norm(others - points[k], axis=1))]
+    away /= np.linalg.norm(away)
+    for off, expected in ((0.08, link), (MATCH_RADIUS + 0.01, None)):
+        monkeypatch.setitem(handles, link, points[k] + off * away)
+        assert env.counterpart(k) == expected, off
+    # The true handle 1 cm from another catalogued part: that one takes it, not k.
+    j = int(np.argmin([np.inf if i == k else np.linalg.norm(p - points[k]) for i, p in
+                       enumerate(points)]))  # fmt: skip
+    toward = (points[k] - points[j]) / np.linalg.norm(points[k] - points[j])
+    monkeypatch.setitem(handles, link, points[j] + 0.01 * toward)
+    assert env.counterpart(j) == link and env.counterpart(k) != link
+
+
 def test_a_part_the_real_robot_sees_shut_is_shut_in_every_particle(shut_episode):
     """A drawer every particle holds open (as after a twin's opening) that stands shut in
     the real cabinet (as after an arm pushed it shut) is shut in every particle after
@@ -288,7 +309,7 @@ def test_a_part_the_real_robot_sees_shut_is_shut_in_every_particle(shut_episode)
         opened.append(ManipState(s.origin, tw.snapshot(), s.t, s.last))
     rw = d.real.world
     rw.restore(real.state.sim)
-    links = {k: d.environment.real_link(k, within=SAME_PART) for k in range(len(d.parts))}
+    links = {k: d.environment.counterpart(k) for k in range(len(d.parts))}
     links = {k: v for k, v in links.items() if v is not None}
     assert len(set(links.values())) >= 2, links
     left_open = next(iter(links.values()))

@@ -89,6 +89,13 @@ DROPS = (0.10, 0.15)
 #: A dropped object's top stays this far below the walls' top when let go [m]: it
 #: cannot tip out over them.
 DROP_BELOW_WALLS = 0.05
+#: Last of all, a drawer's object goes this near the box's front wall [m] (half
+#: :data:`CLEARANCE`), from every height above: a low drawer out only 17 cm under
+#: another leaves the wrist a window of 7 mm between the knob above and its own front
+#: standing 7 cm over its walls (generator seed 3025 ``link_4``; oracle OpenDrawer
+#: episodes 9820 and 9823): the wrist over an object 1 cm from the wall met the knob
+#: (``ik_infeasible`` for every target), 5 mm from it the object was placed.
+TIGHT_GAP = 0.005
 
 
 @dataclass(frozen=True)
@@ -211,8 +218,9 @@ def place_targets(
     from above the drawer's front where it stands higher than the walls, then from above
     the box's walls (:data:`ABOVE_WALLS` over each), then, where that is out of reach,
     from ``place_clearance`` (lift 0), then from just over the walls
-    (:data:`SKIM_OVER`); last, in a box deep enough, each is let go :data:`DROPS` above
-    the floor. A cell has one.
+    (:data:`SKIM_OVER`); then, in a box deep enough, each is let go :data:`DROPS` above
+    the floor; last, the object as near the front wall as :data:`TIGHT_GAP`, from each
+    of these heights in turn. A cell has one.
 
     Raises:
         UnknownNameError: no part ``link``.
@@ -243,7 +251,9 @@ def place_targets(
         )
     yaw = 0.0 if along else 0.5 * np.pi
     middle = 0.5 * (start + front_wall)
-    near_wall = front_wall - CLEARANCE - (half[0] if along else FINGER_SPAN / 2)
+    reach = half[0] if along else FINGER_SPAN / 2  # the object's, or the open fingers'
+    near_wall = front_wall - CLEARANCE - reach
+    tight = front_wall - TIGHT_GAP - reach
     z = center[2] - size[2] / 2 + half[2]
     xs = [middle] + ([near_wall] if near_wall > middle + 1e-3 else [])
     walls = float(size[2])
@@ -257,10 +267,11 @@ def place_targets(
     starts += [(0.0, walls + o, True) for o in SKIM_OVER]
     starts += [(r, over - r, False) for r in DROPS
                if r + 2 * half[2] <= walls - DROP_BELOW_WALLS]  # fmt: skip
+    places = [(x, start) for start in starts for x in xs]
+    places += [(tight, start) for start in starts] if tight > xs[-1] + 1e-3 else []
     return tuple(
         _target(T, np.array([x, center[1], z + r]), yaw, 0.0, "top", lift, skim)
-        for r, lift, skim in starts
-        for x in xs
+        for x, (r, lift, skim) in places
     )
 
 

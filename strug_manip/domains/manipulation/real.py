@@ -84,6 +84,15 @@ NO_PLAN_TRIES = 2
 #: believes a neighbouring door ajar finds the approach to the target blocked).
 #: Planning is cheap next to a step; three bounds what a step may spend on it.
 REAL_PLAN_MODELS = 3
+#: A catalogued part and a true part are one part when each is the other's nearest and
+#: their handles are this close [m] (:meth:`RealEnvironment.counterpart`). Perception
+#: names a bar handle anywhere along the bar: in OpenDrawer episode 9870 the catalogued
+#: point lay 6.1 cm from the true bar's centre, past :data:`~.actions.SAME_PART`, so the
+#: real front of the drawer just opened was passed to no particle; the likeliest held
+#: it 3 cm further out than the real one, and the Place set the object on its front
+#: and tipped the cabinet. Catalogued parts stand at least ``SAME_PART`` apart, and
+#: the nearest of two takes the true part, so twice that is not ambiguous.
+MATCH_RADIUS = 2 * SAME_PART
 
 
 @dataclass
@@ -385,11 +394,22 @@ class RealEnvironment:
         link = min(dist, key=dist.__getitem__, default=None)
         return link if link is not None and dist[link] <= within else None
 
+    def counterpart(self, k: int) -> str | None:
+        """The true part (link) that catalogued part ``k`` stands for, whose front the
+        head camera is read at (:meth:`fronts`): the one whose handle, where it was when
+        the episode began, is nearest ``k``'s point, within :data:`MATCH_RADIUS`, and
+        nearer ``k``'s point than any other catalogued part's. None: perception's part
+        has no true counterpart there."""
+        link = self.real_link(k, within=MATCH_RADIUS)
+        if link is None:
+            return None
+        h = self._need_real().handles[link]
+        nearest = int(np.argmin([np.linalg.norm(p.point - h) for p in self.model.parts]))
+        return link if nearest == k else None
+
     def fronts(self) -> tuple[list[int], dict[int, np.ndarray]]:
         """Where the true cabinet's fronts stand now, per catalogued part with a true
-        part there (the one whose handle, when the episode began, was within
-        :data:`~.actions.SAME_PART` of the catalogued point; none: perception's part has
-        no true counterpart there): the catalogued parts whose true part stands shut
+        part there (:meth:`counterpart`): the catalogued parts whose true part stands shut
         (:data:`~.conditioning.SHUT`), and for each that stands open how far its handle
         is out of where it is shut, world (3,) [m], in the cabinet as it stands now. The
         head camera's cloud shows a front flush or standing out of the carcass to about
@@ -400,7 +420,7 @@ class RealEnvironment:
         T = rw.cabinet_pose()
         shut, out = [], {}
         for k in range(len(self.model.parts)):
-            link = self.real_link(k, within=SAME_PART)
+            link = self.counterpart(k)
             if link is None:
                 continue
             part = spec.part(link)
