@@ -213,12 +213,13 @@ def test_a_drawer_out_of_reach_from_above_is_skimmed_then_dropped_into() -> None
     its places let go DROPS above the floor, the object's top DROP_BELOW_WALLS or more
     under the walls' top, lowered into from as high as the first over the walls; a
     shallower box adds
-    fewer or none; every target's object centre is inside the drawer."""
-    from strug_manip.control.targets import DROP_BELOW_WALLS, DROPS, SKIM_OVER, rim
+    fewer or none; last come the same heights with the object TIGHT_GAP from the front
+    wall; every target's object centre is inside the drawer."""
+    from strug_manip.control.targets import DROP_BELOW_WALLS, DROPS, SKIM_OVER, TIGHT_GAP, rim
 
     spec, T = generate_cabinet(88, kinds=("drawer",)), np.eye(4)  # 8.5 to 29 cm deep
     h = 2 * OBJECT_HALF_SIZE[2]
-    added = []
+    added, tights = [], []
     for part in spec.movable_parts:
         q = 0.9 * part.upper
         targets = place_targets(spec, part.link, q, T)
@@ -231,9 +232,21 @@ def test_a_drawer_out_of_reach_from_above_is_skimmed_then_dropped_into() -> None
         assert [t.lift for t in skims] == pytest.approx(
             [walls + o for o in SKIM_OVER for _ in range(n)]
         )
-        drops = targets[(high + len(SKIM_OVER)) * n :]
         deep = [r for r in DROPS if r + h <= walls - DROP_BELOW_WALLS]
+        starts = high + len(SKIM_OVER) + len(deep)  # heights, each with n places
+        drops = targets[(high + len(SKIM_OVER)) * n : starts * n]
         assert len(drops) == len(deep) * n
+        # Last, one place per height TIGHT_GAP from the front wall (nearer than the rest).
+        tight = targets[starts * n :]
+        assert len(tight) in (0, starts)
+        tights.append(len(tight))
+        front_wall = part.point_at(part.interior_center, q)[0] + part.interior_size[0] / 2
+        for t, same in zip(tight, targets[n - 1 :: n], strict=False):
+            reach = OBJECT_HALF_SIZE[0] if abs(t.p[0, 0]) > 0.5 else FINGER_SPAN / 2
+            assert t.p[0, 3] == pytest.approx(front_wall - TIGHT_GAP - reach)
+            assert t.p[0, 3] > same.p[0, 3] + 1e-3
+            assert t.p[2, 3] + t.lift == pytest.approx(same.p[2, 3] + same.lift)
+            assert t.skim == same.skim
         added.append(len(deep))
         for k, t in enumerate(drops):
             assert not t.skim
@@ -244,6 +257,7 @@ def test_a_drawer_out_of_reach_from_above_is_skimmed_then_dropped_into() -> None
         for t in targets:
             assert inside(spec, part.link, q, T, t.p)
     assert min(added) == 0 and max(added) == len(DROPS), added
+    assert max(tights) > 0, tights
 
 
 def _drop_down_flaps(seeds: range) -> list:
