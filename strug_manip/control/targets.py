@@ -91,10 +91,11 @@ DROPS = (0.10, 0.15)
 DROP_BELOW_WALLS = 0.05
 #: Last of all, a drawer's object goes this near the box's front wall [m] (half
 #: :data:`CLEARANCE`), from every height above: a low drawer out only 17 cm under
-#: another leaves the wrist a window of 7 mm between the knob above and its own front
-#: standing 7 cm over its walls (generator seed 3025 ``link_4``; oracle OpenDrawer
-#: episodes 9820 and 9823): the wrist over an object 1 cm from the wall met the knob
-#: (``ik_infeasible`` for every target), 5 mm from it the object was placed.
+#: another leaves the wrist's roll link (a 10.4 cm disc) a window of 7 mm between the
+#: knob above and the drawer's own front, which stands 7 cm over its walls (generator
+#: seed 3025 ``link_4``, oracle OpenDrawer episode 9820): over an object 1 cm from the
+#: wall it met the knob at every target (``ik_infeasible``); 5 mm from it the object
+#: was placed.
 TIGHT_GAP = 0.005
 
 
