@@ -70,6 +70,7 @@ from strug_manip.control.plan import (
 from strug_manip.control.targets import PlaceTarget
 from strug_manip.control.twin_body import BoundTwin, PlanningTwin
 from strug_manip.objects.hypotheses import BelievedJoint, check_pose
+from strug_manip.robot.fetch import GRIPPER_SITE
 from strug_manip.world.scene import OBJECT_HALF_SIZE
 from strug_manip.world.sim import ManipulationWorld
 
@@ -493,8 +494,6 @@ def object_grasp(T_world_object: np.ndarray, grasp: str, toward: np.ndarray) -> 
 def holds_object(world: ManipulationWorld) -> bool:
     """The object is in the hand: its centre within :data:`HELD_RADIUS` of the TCP (the
     full Fetch's or the twin's hand alike)."""
-    from strug_manip.robot.fetch import GRIPPER_SITE
-
     tcp = world.site_pose(GRIPPER_SITE)[:3, 3]
     return bool(np.linalg.norm(tcp - world.object_pose()[:3, 3]) <= HELD_RADIUS)
 
@@ -567,8 +566,6 @@ class Place(Skill):
     def plan(self, world: ManipulationWorld, params: SkillParams = DEFAULT_PARAMS) -> SkillPlan:
         _check_object(self.o)
         p = check_pose("p (T_world_object)", self.p)
-        from strug_manip.robot.fetch import GRIPPER_SITE
-
         if not holds_object(world):
             raise ConfigError(f"Place needs {self.o!r} in the gripper; it is not held")
         T_wg, T_wo = world.site_pose(GRIPPER_SITE), world.object_pose()
