@@ -64,11 +64,10 @@ class SkillParams:
             (at half the angle drop-down flaps sprang back, no longer wide enough for the
             object; close to the whole angle the wrist cannot follow).
         limit_margin_m, limit_margin_rad: an opening stops this short of the believed
-            joint limit [m], [rad], so it never drives the part into its stop (it
-            comes there at ``ease_speed``). A low drawer under another is out only
-            15-20 cm, and the centimetre more that 0.01 m leaves than 0.02 m is what
-            its Place needs (generator seeds 3025, 3038, 9602: the wrist between the
-            handle above and the box's front; oracle OpenDrawer episode 9823).
+            joint limit [m], [rad], so it never drives the part into its stop. 0.01 m
+            gave a low drawer under another the centimetre its Place needed (oracle
+            OpenDrawer episode 9823) but lost two held-out STRUG episodes of
+            9920:9950 (9935, 9948, one a drag), none won: kept at 0.02 m.
         probe_distance: how far Push, PullV and PullH move the gripper [m]: enough to
             move a free part visibly (a 4 cm shift shows in the head camera's point
             cloud), little enough that a wrong direction seldom drags the cabinet.
@@ -211,7 +210,7 @@ class SkillParams:
     flap_angle: float = 1.57
     drop_angle: float = 1.57
     flap_wrist_share: float = 0.7
-    limit_margin_m: float = 0.01
+    limit_margin_m: float = 0.02
     limit_margin_rad: float = 0.05
     probe_distance: float = 0.04
     retreat_distance: float = 0.08
