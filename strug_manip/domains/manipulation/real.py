@@ -398,7 +398,7 @@ class RealEnvironment:
         """The true part (link) that catalogued part ``k`` stands for, whose front the
         head camera is read at (:meth:`fronts`): the one whose handle, where it was when
         the episode began, is nearest ``k``'s point, within :data:`MATCH_RADIUS`, and
-        nearer ``k``'s point than any other catalogued part's. None: perception's part
+        to which no other catalogued part's point is nearer. None: perception's part
         has no true counterpart there."""
         link = self.real_link(k, within=MATCH_RADIUS)
         if link is None:
