@@ -28,6 +28,7 @@ from strug_manip.domains import (
 )
 from strug_manip.experiments.episode import DEFAULT_PARTICLES
 from strug_manip.experiments.executors import EXECUTORS, run_local, run_ray
+from strug_manip.experiments.records import read_jsonl
 from strug_manip.experiments.table import summarize, to_markdown, write_csv, write_png
 from strug_manip.experiments.task import check_solver, planner_of, run_task, solver_config
 from strug_manip.objects.loader import object_folders
@@ -108,23 +109,14 @@ def load_results(out: Path) -> list[dict[str, Any]]:
             (another program's file).
     """
     path = out / RESULTS
-    if not path.exists():
-        return []
-    records, lines = [], path.read_text().splitlines()
-    for i, line in enumerate(lines):
-        try:
-            rec = json.loads(line)
-        except json.JSONDecodeError:
-            if i == len(lines) - 1:
-                break  # killed mid-write: that episode simply did not finish
-            raise ConfigError(f"{path}: line {i + 1} is not JSON; the file is corrupt") from None
+    records = read_jsonl(path)
+    for i, rec in enumerate(records):
         if not isinstance(rec, dict) or any(k not in rec for k in RECORD_FIELDS):
             raise ConfigError(
                 f"{path}: line {i + 1} is not a bench episode record (fields "
                 f"{', '.join(RECORD_FIELDS)}); is this another program's file? "
                 "Choose another --out"
             )
-        records.append(rec)
     return records
 
 

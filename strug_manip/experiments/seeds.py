@@ -11,6 +11,8 @@ from typing import Any
 
 from tqdm import tqdm
 
+from strug_manip.experiments.records import read_jsonl
+
 
 def seed_range(text: str, below: int | None = None) -> range:
     """Generator seeds START..STOP-1 from ``"START:STOP"`` (0 <= START < STOP, and
@@ -67,8 +69,7 @@ def rows_per_seed(
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
         path = out / "results.jsonl"
-        if path.exists():
-            done = {r["seed"]: r for r in map(json.loads, path.read_text().splitlines())}
+        done = {r["seed"]: r for r in read_jsonl(path)}
     rows = []
     for seed in tqdm(seeds, desc=desc, unit="seed"):
         if seed in done:
