@@ -20,9 +20,11 @@ from strug_manip.control import (
     PullH,
     PullV,
     Push,
+    Status,
     handle_grasps,
     place_targets,
 )
+from strug_manip.control.motion import GOAL_INVALID
 from strug_manip.domains.manipulation.actions import TABLE, ManipAction, part_point
 from strug_manip.domains.manipulation.catalogue import Catalogue, Root
 from strug_manip.domains.manipulation.rules import UNCHANGED, dragged, inside
@@ -48,12 +50,12 @@ def skills(
     sim: WorldState,
     holder: int | None = None,
 ) -> tuple[list, ManipulationWorld | None]:
-    """The skills to try in turn (each next grasp or placement while the previous is
-    ``ik_infeasible``) and the planning world, for ``a`` on particle ``i`` in ``sim``
-    (on the real robot: ``i`` is the model it plans in, ``sim`` its state). An
-    opening or a probe follows ``holder``'s grasp and joint and plans in its
-    likeliest state (default: the hypothesis's representative, :meth:`.Root.rep`).
-    ``home``: where ``Place(table)`` puts the object back, (4, 4)."""
+    """The skills to try in turn (each next grasp or placement while the previous
+    cannot be reached: :func:`cannot_reach`) and the planning world, for ``a`` on
+    particle ``i`` in ``sim`` (on the real robot: ``i`` is the model it plans in,
+    ``sim`` its state). An opening or a probe follows ``holder``'s grasp and joint
+    and plans in its likeliest state (default: the hypothesis's representative,
+    :meth:`.Root.rep`). ``home``: where ``Place(table)`` puts the object back, (4, 4)."""
     if a.skill == "Pick":
         # The object's table is far from the cabinet: one planning world serves
         # every model, so the base placement is found once for all of them.
@@ -171,13 +173,32 @@ def attempt(run: Callable[[], Outcome]) -> Outcome | None:
         return None
 
 
+def cannot_reach(out: Outcome) -> bool:
+    """``out`` stopped before anything moved because its grasp or placement cannot be
+    reached: no base pose and arm reach it (``ik_infeasible``), or where they would,
+    the arm or what it carries touches the cabinet it plans against (``no_motion_plan``
+    with the motion plan's goal invalid, after every base pose was tried). Another
+    grasp or placement of the same action may be reached either way."""
+    if out.status == Status.IK_INFEASIBLE:
+        return True
+    return out.status == Status.NO_MOTION_PLAN and out.detail.startswith(GOAL_INVALID)
+
+
 def first_feasible(runs: Iterable[Callable[[], Outcome]]) -> Outcome | None:
     """The outcome of the first of ``runs`` (callables, each a skill with its next
-    grasp or placement) that is not ``ik_infeasible``, else the last one's (None when
-    it could not be planned: :func:`attempt`)."""
+    grasp or placement) that can be reached (:func:`cannot_reach`), else the last
+    one's (None when it could not be planned: :func:`attempt`).
+
+    A goal the arm cannot reach without touching the cabinet counts as unreachable
+    as much as one without an IK solution: before, a ``Place`` whose first target
+    put the object into the front of the drawer above at the end of the carry
+    stopped there (``no_motion_plan``, the goal invalid), and the robot asked for
+    the same ``Place`` again, which stopped the same way (POMCPOW, OpenDrawer episode
+    9943: two steps lost; its second target placed). The twins' floating hand plans
+    no motions, so only the full robot's outcomes change."""
     out = None
     for run in runs:
         out = attempt(run)
-        if out is not None and out.status != "ik_infeasible":
+        if out is not None and not cannot_reach(out):
             break
     return out

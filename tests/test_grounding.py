@@ -1,0 +1,50 @@
+"""Which grasp or placement of an action the robot goes on with
+(:func:`strug_manip.domains.manipulation.grounding.first_feasible`)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from strug_manip.control import Outcome, Status
+from strug_manip.control.motion import GOAL_INVALID, NO_PLAN, START_INVALID
+from strug_manip.domains.manipulation.grounding import cannot_reach, first_feasible
+
+
+def outcome(status: Status, detail: str = "") -> Outcome:
+    return Outcome(
+        skill="Place", status=status, detail=detail, phase="reach", part_motion={},
+        part_units={}, part_positions={}, cabinet_displacement=0.0, cabinet_motion=0.0,
+        object_pose=np.eye(4), holding=True, times=np.zeros(1), qpos=np.zeros((1, 3)),
+    )  # fmt: skip
+
+
+def tried(outcomes: list[Outcome]) -> tuple[Outcome | None, int]:
+    """first_feasible over runs returning ``outcomes`` in turn; the runs it made."""
+    calls = []
+
+    def run(o: Outcome) -> Outcome:
+        calls.append(o)
+        return o
+
+    out = first_feasible((lambda o=o: run(o)) for o in outcomes)
+    return out, len(calls)
+
+
+def test_a_goal_that_touches_the_cabinet_passes_to_the_next_placement() -> None:
+    blocked = outcome(Status.NO_MOTION_PLAN, f"{GOAL_INVALID}: contacts: cabinet/link_1/object")
+    ok = outcome(Status.OK)
+    assert cannot_reach(blocked) and cannot_reach(outcome(Status.IK_INFEASIBLE))
+    assert tried([blocked, outcome(Status.IK_INFEASIBLE), ok, blocked]) == (ok, 3)
+    # None reached: the last one's outcome says why.
+    assert tried([outcome(Status.IK_INFEASIBLE), blocked]) == (blocked, 2)
+
+
+def test_a_plan_that_fails_for_another_reason_ends_the_action() -> None:
+    # A start in contact, or a search that ran out of checks, is no fault of the
+    # placement (and the next would spend the same budget): the robot stops there.
+    for detail in (f"{START_INVALID}: contacts: a/b", f"{NO_PLAN}: Timeout"):
+        stop = outcome(Status.NO_MOTION_PLAN, detail)
+        assert not cannot_reach(stop)
+        assert tried([stop, outcome(Status.OK)]) == (stop, 1)
+    moved = outcome(Status.COLLISION)
+    assert tried([moved, outcome(Status.OK)]) == (moved, 1)
