@@ -1,13 +1,23 @@
 """Which grasp or placement of an action the robot goes on with
-(:func:`strug_manip.domains.manipulation.grounding.first_feasible`)."""
+(:func:`strug_manip.domains.manipulation.grounding.first_feasible`), and how far an
+opening goes (:func:`~strug_manip.domains.manipulation.grounding.longest_travel`)."""
 
 from __future__ import annotations
 
+import dataclasses
+from types import SimpleNamespace
+
 import numpy as np
+import pytest
 
 from strug_manip.control import Outcome, Status
 from strug_manip.control.motion import GOAL_INVALID, NO_PLAN, START_INVALID
-from strug_manip.domains.manipulation.grounding import cannot_reach, first_feasible
+from strug_manip.domains.manipulation.grounding import (
+    cannot_reach,
+    first_feasible,
+    longest_travel,
+)
+from strug_manip.objects.generator import generate_cabinet
 
 
 def outcome(status: Status, detail: str = "") -> Outcome:
@@ -48,3 +58,26 @@ def test_a_plan_that_fails_for_another_reason_ends_the_action() -> None:
         assert tried([stop, outcome(Status.OK)]) == (stop, 1)
     moved = outcome(Status.COLLISION)
     assert tried([moved, outcome(Status.OK)]) == (moved, 1)
+
+
+def test_an_opening_goes_on_to_the_longest_limit_among_parts_that_move_alike() -> None:
+    doors = generate_cabinet(7, kinds=("door",))
+    door = next(p for p in doors.parts if p.joint_type == "revolute" and p.hinge == "left")
+    drawer = next(
+        p for p in generate_cabinet(11, kinds=("drawer",)).parts if p.joint_type == "prismatic"
+    )
+    variants = [
+        dataclasses.replace(door, upper=1.6),
+        dataclasses.replace(door, upper=1.9),
+        dataclasses.replace(door, hinge="top", upper=2.5),  # another hinge: not counted
+        dataclasses.replace(drawer, upper=0.4),
+        door,
+    ]
+    w = SimpleNamespace(
+        particles=[SimpleNamespace(spec=SimpleNamespace(part=lambda _l, p=p: p)) for p in variants]
+    )
+    links = ["link", "link", "link", "link", None]  # the last particle has no part there
+    assert longest_travel(w, links, 0.5, variants[0]) == pytest.approx(1.4)
+    assert longest_travel(w, links, 0.1, variants[3]) == pytest.approx(0.3)
+    # No particle holds such a part: no travel beyond q.
+    assert longest_travel(w, [None] * 5, 0.5, door) == 0.0

@@ -30,7 +30,7 @@ from strug_manip.domains.manipulation.catalogue import Catalogue, Root
 from strug_manip.domains.manipulation.rules import UNCHANGED, dragged, inside
 from strug_manip.domains.manipulation.worlds import ParticleWorlds
 from strug_manip.geometry import rotation_angle
-from strug_manip.objects.generator import CabinetSpec
+from strug_manip.objects.generator import CabinetSpec, PartSpec
 from strug_manip.objects.hypotheses import BelievedJoint
 from strug_manip.world.sim import ManipulationWorld, WorldState
 
@@ -88,26 +88,34 @@ def skills(
     grasps = handle_grasps(spec_part, q, T)
     if a.skill in ("OpenDrawer", "OpenDoor"):
         joint = BelievedJoint.of_part(spec_part, q, T)
-        if a.skill == "OpenDrawer":
-            longest = longest_travel(w, part.links, q)
-            likely, joint = joint.limit, replace(joint, limit=max(joint.limit, longest))
-            return [OpenDrawer(g, joint, likely_limit=likely) for g in grasps], plan_world
-        return [OpenDoor(g, joint) for g in grasps], plan_world
+        longest = longest_travel(w, part.links, q, spec_part)
+        likely, joint = joint.limit, replace(joint, limit=max(joint.limit, longest))
+        opening = OpenDrawer if a.skill == "OpenDrawer" else OpenDoor
+        return [opening(g, joint, likely_limit=likely) for g in grasps], plan_world
     probe = {"Push": Push, "PullV": PullV, "PullH": PullH}[a.skill]
     return [probe(g) for g in grasps], plan_world
 
 
-def longest_travel(w: ParticleWorlds, links: Sequence[str | None], q: float) -> float:
-    """The longest travel [m] any particle's drawer at a catalogued part (``links``: its
-    link per particle) has left from ``q`` [m]: how far an opening of it goes on,
-    slowly, past the likeliest model's limit. A drawer's limit shows in no view (the
-    particles spread it over the generator's range, :mod:`.belief`); an opening that
-    stopped at the likeliest model's left the real drawer out too little for the
-    object, and every particle without a longer limit with no way to open it more."""
+def longest_travel(
+    w: ParticleWorlds, links: Sequence[str | None], q: float, like: PartSpec
+) -> float:
+    """The longest travel [m or rad] left from ``q`` of any particle's part at a
+    catalogued part (``links``: its link per particle) that moves as ``like`` does (a
+    drawer; a door hinged on the same side): how far an opening of it goes on, slowly,
+    past the likeliest model's limit. A part's limit shows in no view (the particles
+    spread it over the generator's range, :mod:`.belief`). An opening that stopped at
+    the likeliest model's limit left the real part open too little for the object,
+    and every particle without a longer limit with no way to open it more: a drawer
+    out too little; a lift-up flap raised to 1.18 rad, where the likeliest model's
+    limit was 1.27 rad and its object needed 1.4 rad, was opened again, moving
+    nothing, to the end of the episode (OpenDoor episode 9948; the real flap's limit
+    was 1.56 rad)."""
     uppers = [
         p.upper
         for i, link in enumerate(links)
-        if link is not None and (p := w.particles[i].spec.part(link)).joint_type == "prismatic"
+        if link is not None
+        and (p := w.particles[i].spec.part(link)).joint_type == like.joint_type
+        and p.hinge == like.hinge
     ]
     return max(uppers, default=q) - q
 
