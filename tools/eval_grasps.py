@@ -19,8 +19,10 @@ mink IK, OMPL, MuJoCo physics) from a fresh reset, with the opening skill under 
 part's *true* joint (:class:`OpenDrawer` for a drawer, :class:`OpenDoor` for a door or
 flap), so that only the grasp decides. As with the skills library's own handle grasps
 (:func:`strug_manip.control.handle_grasps`), a grasp whose level approach no base pose
-reaches (``ik_infeasible``) is tried pitched by :data:`~strug_manip.control.grasps.
-PITCHES` about the horizontal axis of the front. Outcomes:
+reaches (``ik_infeasible``, or its goal touches the cabinet:
+:func:`~strug_manip.domains.manipulation.grounding.cannot_reach`) is tried pitched by
+:data:`~strug_manip.control.grasps.PITCHES` about the horizontal axis of the front.
+Outcomes:
 
 * ``ok``: the skill ran to its end and the part moved at least :data:`MOVED_SHARE` of
   the commanded travel (the part followed the gripper: the grasp held);
@@ -55,6 +57,7 @@ from planners.errors import UnknownNameError
 from strug_manip.control import ControlContext, OpenDoor, OpenDrawer, part_at
 from strug_manip.control.grasps import PITCHES
 from strug_manip.control.params import DEFAULT_PARAMS
+from strug_manip.domains.manipulation.grounding import cannot_reach
 from strug_manip.experiments.seeds import evaluation_seeds
 from strug_manip.geometry import axis_angle
 from strug_manip.objects.hypotheses import BelievedJoint
@@ -97,7 +100,7 @@ def run_grasp(world, g, part, joint, ctx, start) -> tuple[str, float]:
         gp = pitched(g, pitch)
         skill = OpenDrawer(gp, joint) if joint.type == "prismatic" else OpenDoor(gp, joint)
         out = skill.run(world, ctx=ctx)
-        if out.status != "ik_infeasible":
+        if not cannot_reach(out):
             break
     moved = abs(out.motion_of(joint_name))
     p = DEFAULT_PARAMS

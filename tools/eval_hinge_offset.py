@@ -27,7 +27,8 @@ from collections import Counter
 
 import numpy as np
 
-from strug_manip.control import ControlContext, OpenDoor, SkillParams, Status, handle_grasps
+from strug_manip.control import ControlContext, OpenDoor, SkillParams, handle_grasps
+from strug_manip.domains.manipulation.grounding import cannot_reach
 from strug_manip.domains.manipulation.rules import dragged, open_enough
 from strug_manip.experiments.seeds import seed_tool
 from strug_manip.geometry import axis_angle
@@ -65,7 +66,8 @@ def offset_joint(true: BelievedJoint, grasp: np.ndarray, kind: str, amount: floa
 
 
 def open_once(world: ManipulationWorld, part, joint: BelievedJoint, ctx) -> dict:
-    """One opening from reset (the grasps in turn until one is not ``ik_infeasible``)."""
+    """One opening from reset (the grasps in turn until one can be reached:
+    :func:`~strug_manip.domains.manipulation.grounding.cannot_reach`)."""
     T = world.scene.T_world_cabinet
     spec = world.scene.cabinet_spec
     name = world.scene.cabinet_prefix + part.joint
@@ -74,7 +76,7 @@ def open_once(world: ManipulationWorld, part, joint: BelievedJoint, ctx) -> dict
         world.reset()
         skill = OpenDoor(g, joint)
         out = skill.run(world, ctx=ctx)
-        if out.status is not Status.IK_INFEASIBLE:
+        if not cannot_reach(out):
             break
     assert out is not None
     q = world.part_positions()[name]

@@ -30,7 +30,8 @@ import functools
 import sys
 from collections import Counter
 
-from strug_manip.control import ControlContext, Pick, Place, SkillParams, Status, place_targets
+from strug_manip.control import ControlContext, Pick, Place, SkillParams, place_targets
+from strug_manip.domains.manipulation.grounding import first_feasible
 from strug_manip.domains.manipulation.rules import dragged, inside, open_enough
 from strug_manip.experiments.seeds import seed_tool
 from strug_manip.world.scene import SceneConfig
@@ -73,13 +74,13 @@ def open_position(part, params: SkillParams) -> float:
 
 def place_once(world, pw, link: str, q: float, ctx) -> dict:
     """One Place from the world's present state, planned in ``pw`` (the believed world,
-    its part at ``q``): the targets in turn until one is not ``ik_infeasible``."""
+    its part at ``q``): the targets in turn until one can be reached, as the robot
+    goes through them (:func:`~strug_manip.domains.manipulation.grounding.first_feasible`)."""
     spec = world.scene.cabinet_spec
-    out = None
-    for tgt in place_targets(spec, link, q, pw.scene.T_world_cabinet):
-        out = Place.onto(tgt).run(world, ctx=ctx, plan_world=pw)
-        if out.status is not Status.IK_INFEASIBLE:
-            break
+    out = first_feasible(
+        functools.partial(Place.onto(tgt).run, world, ctx=ctx, plan_world=pw)
+        for tgt in place_targets(spec, link, q, pw.scene.T_world_cabinet)
+    )
     assert out is not None
     name = world.scene.cabinet_prefix + spec.part(link).joint
     T_now = world.cabinet_pose()

@@ -12,14 +12,15 @@ doors-only cabinet, as the OpenDrawer and OpenDoor tasks draw them), and for eve
 movable part with a handle (a flat front cannot be grasped):
 
 - **open** under the true model (:class:`OpenDrawer` for a drawer, :class:`OpenDoor`
-  for a door or flap; the grasps of :func:`handle_grasps` in turn until one is not
-  ``ik_infeasible``): a success is a run that ends ``ok``, with the part open enough
+  for a door or flap; the grasps of :func:`handle_grasps` in turn until one can be
+  reached, as the robot takes them: :func:`~strug_manip.domains.manipulation.grounding.
+  cannot_reach`): a success is a run that ends ``ok``, with the part open enough
   for the object (:func:`~strug_manip.domains.manipulation.rules.open_enough`) and
   the cabinet not dragged (a part whose cell cannot take the object even open to its
   limit: moved 90 % of the skill's travel); failures are counted by cause;
 - the **chain** from there when it opened: Pick (with the grasp the part's target
   needs) then Place into the drawer / behind the door (the targets of
-  :func:`place_targets` in turn until one is not ``ik_infeasible``); a success is the
+  :func:`place_targets` in turn until one can be reached); a success is the
   object resting inside the part (:func:`~strug_manip.domains.manipulation.rules.inside`);
 - **wrong models**: the two likeliest confusions of the part's kinematics (a drawer
   taken for a door hinged left or right; a side door for a drawer or a door hinged on
@@ -83,6 +84,7 @@ from strug_manip.control import (
 )
 from strug_manip.control.params import DEFAULT_PARAMS
 from strug_manip.control.twin_body import TIMESTEP as TWIN_STEP
+from strug_manip.domains.manipulation.grounding import cannot_reach
 from strug_manip.domains.manipulation.rules import dragged, inside, open_enough
 from strug_manip.experiments.seeds import seed_range
 from strug_manip.objects.hypotheses import BelievedJoint, believed_spec, cell_joints, model_of
@@ -123,7 +125,7 @@ def world_joint(spec, link: str, model: str, T: np.ndarray) -> BelievedJoint:
 
 
 def run_opening(world, spec, link, joint, ctx, plan_world=None):
-    """The first grasp of the believed part that is not ``ik_infeasible``: (skill,
+    """The first grasp of the believed part that can be reached (``cannot_reach``): (skill,
     outcome)."""
     bspec = spec if plan_world is None else plan_world.scene.cabinet_spec
     T = world.scene.T_world_cabinet
@@ -134,7 +136,7 @@ def run_opening(world, spec, link, joint, ctx, plan_world=None):
             plan_world.reset()
         skill = opening(joint, g)
         out = skill.run(world, ctx=ctx, plan_world=plan_world)
-        if out.status != "ik_infeasible":
+        if not cannot_reach(out):
             break
     if out is None:
         raise ValueError(f"part {link!r} has a handle but no grasp (see handle_grasps)")
@@ -241,7 +243,7 @@ def evaluate_part(world, twins: dict, spec, part, ctx, only_twin: bool = False) 
         if pick.ok:
             for tgt in tgts:  # the next where no base placement reaches one (no motion)
                 place = Place.onto(tgt).run(world, ctx=ctx)
-                if place.status != "ik_infeasible":
+                if not cannot_reach(place):
                     break
             chain["place"] = str(place.status)
             q2 = world.part_positions()[joint_name]
@@ -299,7 +301,7 @@ def evaluate_part(world, twins: dict, spec, part, ctx, only_twin: bool = False) 
         for g in grasps:
             world.reset()
             o = make(g).run(world, ctx=ctx)
-            if o.status != "ik_infeasible":
+            if not cannot_reach(o):
                 break
         probes[name] = {
             "status": str(o.status),
@@ -339,7 +341,7 @@ def wrong_sequence(world, spec, part, model: str, ctx) -> list[float]:
         try:
             for g in handle_grasps(bspec.part(part.link), q, T):
                 o = opening(joint, g).run(world, ctx=ctx, plan_world=pw)
-                if o.status != "ik_infeasible":
+                if not cannot_reach(o):
                     break
         except ConfigError:
             pass  # the belief leaves no travel: no pull
