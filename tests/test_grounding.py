@@ -13,7 +13,6 @@ import pytest
 from strug_manip.control import Outcome, Status
 from strug_manip.control.motion import GOAL_INVALID, NO_PLAN, START_INVALID
 from strug_manip.domains.manipulation.grounding import (
-    cannot_reach,
     first_feasible,
     longest_travel,
 )
@@ -43,7 +42,7 @@ def tried(outcomes: list[Outcome]) -> tuple[Outcome | None, int]:
 def test_a_goal_that_touches_the_cabinet_passes_to_the_next_placement() -> None:
     blocked = outcome(Status.NO_MOTION_PLAN, f"{GOAL_INVALID}: contacts: cabinet/link_1/object")
     ok = outcome(Status.OK)
-    assert cannot_reach(blocked) and cannot_reach(outcome(Status.IK_INFEASIBLE))
+    assert blocked.cannot_reach and outcome(Status.IK_INFEASIBLE).cannot_reach
     assert tried([blocked, outcome(Status.IK_INFEASIBLE), ok, blocked]) == (ok, 3)
     # None reached: the last one's outcome says why.
     assert tried([outcome(Status.IK_INFEASIBLE), blocked]) == (blocked, 2)
@@ -54,7 +53,7 @@ def test_a_plan_that_fails_for_another_reason_ends_the_action() -> None:
     # placement (and the next would spend the same budget): the robot stops there.
     for detail in (f"{START_INVALID}: contacts: a/b", f"{NO_PLAN}: Timeout"):
         stop = outcome(Status.NO_MOTION_PLAN, detail)
-        assert not cannot_reach(stop)
+        assert not stop.cannot_reach
         assert tried([stop, outcome(Status.OK)]) == (stop, 1)
     moved = outcome(Status.COLLISION)
     assert tried([moved, outcome(Status.OK)]) == (moved, 1)

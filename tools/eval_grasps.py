@@ -20,7 +20,7 @@ part's *true* joint (:class:`OpenDrawer` for a drawer, :class:`OpenDoor` for a d
 flap), so that only the grasp decides. As with the skills library's own handle grasps
 (:func:`strug_manip.control.handle_grasps`), a grasp whose level approach no base pose
 reaches (``ik_infeasible``, or its goal touches the cabinet:
-:func:`~strug_manip.domains.manipulation.grounding.cannot_reach`) is tried pitched by
+:attr:`~strug_manip.control.Outcome.cannot_reach`) is tried pitched by
 :data:`~strug_manip.control.grasps.PITCHES` about the horizontal axis of the front.
 Outcomes:
 
@@ -57,7 +57,6 @@ from planners.errors import UnknownNameError
 from strug_manip.control import ControlContext, OpenDoor, OpenDrawer, part_at
 from strug_manip.control.grasps import PITCHES
 from strug_manip.control.params import DEFAULT_PARAMS
-from strug_manip.domains.manipulation.grounding import cannot_reach
 from strug_manip.experiments.seeds import evaluation_seeds
 from strug_manip.geometry import axis_angle
 from strug_manip.objects.hypotheses import BelievedJoint
@@ -100,7 +99,7 @@ def run_grasp(world, g, part, joint, ctx, start) -> tuple[str, float]:
         gp = pitched(g, pitch)
         skill = OpenDrawer(gp, joint) if joint.type == "prismatic" else OpenDoor(gp, joint)
         out = skill.run(world, ctx=ctx)
-        if not cannot_reach(out):
+        if not out.cannot_reach:
             break
     moved = abs(out.motion_of(joint_name))
     p = DEFAULT_PARAMS

@@ -28,7 +28,6 @@ from collections import Counter
 import numpy as np
 
 from strug_manip.control import ControlContext, OpenDoor, SkillParams, handle_grasps
-from strug_manip.domains.manipulation.grounding import cannot_reach
 from strug_manip.domains.manipulation.rules import dragged, open_enough
 from strug_manip.experiments.seeds import seed_tool
 from strug_manip.geometry import axis_angle
@@ -67,7 +66,7 @@ def offset_joint(true: BelievedJoint, grasp: np.ndarray, kind: str, amount: floa
 
 def open_once(world: ManipulationWorld, part, joint: BelievedJoint, ctx) -> dict:
     """One opening from reset (the grasps in turn until one can be reached:
-    :func:`~strug_manip.domains.manipulation.grounding.cannot_reach`)."""
+    :attr:`~strug_manip.control.Outcome.cannot_reach`)."""
     T = world.scene.T_world_cabinet
     spec = world.scene.cabinet_spec
     name = world.scene.cabinet_prefix + part.joint
@@ -76,7 +75,7 @@ def open_once(world: ManipulationWorld, part, joint: BelievedJoint, ctx) -> dict
         world.reset()
         skill = OpenDoor(g, joint)
         out = skill.run(world, ctx=ctx)
-        if not cannot_reach(out):
+        if not out.cannot_reach:
             break
     assert out is not None
     q = world.part_positions()[name]

@@ -13,10 +13,10 @@ movable part with a handle (a flat front cannot be grasped):
 
 - **open** under the true model (:class:`OpenDrawer` for a drawer, :class:`OpenDoor`
   for a door or flap; the grasps of :func:`handle_grasps` in turn until one can be
-  reached, as the robot takes them: :func:`~strug_manip.domains.manipulation.grounding.
-  cannot_reach`): a success is a run that ends ``ok``, with the part open enough
-  for the object (:func:`~strug_manip.domains.manipulation.rules.open_enough`) and
-  the cabinet not dragged (a part whose cell cannot take the object even open to its
+  reached, as the robot takes them: ``Outcome.cannot_reach``): a success is a run
+  that ends ``ok``, with the part open enough for the object
+  (:func:`~strug_manip.domains.manipulation.rules.open_enough`) and the cabinet not
+  dragged (a part whose cell cannot take the object even open to its
   limit: moved 90 % of the skill's travel); failures are counted by cause;
 - the **chain** from there when it opened: Pick (with the grasp the part's target
   needs) then Place into the drawer / behind the door (the targets of
@@ -84,7 +84,6 @@ from strug_manip.control import (
 )
 from strug_manip.control.params import DEFAULT_PARAMS
 from strug_manip.control.twin_body import TIMESTEP as TWIN_STEP
-from strug_manip.domains.manipulation.grounding import cannot_reach
 from strug_manip.domains.manipulation.rules import dragged, inside, open_enough
 from strug_manip.experiments.seeds import seed_range
 from strug_manip.objects.hypotheses import BelievedJoint, believed_spec, cell_joints, model_of
@@ -136,7 +135,7 @@ def run_opening(world, spec, link, joint, ctx, plan_world=None):
             plan_world.reset()
         skill = opening(joint, g)
         out = skill.run(world, ctx=ctx, plan_world=plan_world)
-        if not cannot_reach(out):
+        if not out.cannot_reach:
             break
     if out is None:
         raise ValueError(f"part {link!r} has a handle but no grasp (see handle_grasps)")
@@ -243,7 +242,7 @@ def evaluate_part(world, twins: dict, spec, part, ctx, only_twin: bool = False) 
         if pick.ok:
             for tgt in tgts:  # the next where no base placement reaches one (no motion)
                 place = Place.onto(tgt).run(world, ctx=ctx)
-                if not cannot_reach(place):
+                if not place.cannot_reach:
                     break
             chain["place"] = str(place.status)
             q2 = world.part_positions()[joint_name]
@@ -301,7 +300,7 @@ def evaluate_part(world, twins: dict, spec, part, ctx, only_twin: bool = False) 
         for g in grasps:
             world.reset()
             o = make(g).run(world, ctx=ctx)
-            if not cannot_reach(o):
+            if not o.cannot_reach:
                 break
         probes[name] = {
             "status": str(o.status),
@@ -341,7 +340,7 @@ def wrong_sequence(world, spec, part, model: str, ctx) -> list[float]:
         try:
             for g in handle_grasps(bspec.part(part.link), q, T):
                 o = opening(joint, g).run(world, ctx=ctx, plan_world=pw)
-                if not cannot_reach(o):
+                if not o.cannot_reach:
                     break
         except ConfigError:
             pass  # the belief leaves no travel: no pull

@@ -32,6 +32,8 @@ from enum import StrEnum
 
 import numpy as np
 
+from strug_manip.control.motion import GOAL_INVALID
+
 
 class Status(StrEnum):
     """How a skill execution ended."""
@@ -111,6 +113,18 @@ class Outcome:
     def ok(self) -> bool:
         """The skill ran to its end (``status == ok``)."""
         return self.status is Status.OK
+
+    @property
+    def cannot_reach(self) -> bool:
+        """It stopped before anything moved because its grasp or placement cannot be
+        reached: no base pose and arm reach it (``ik_infeasible``), or where they
+        would, the arm or what it carries touches the cabinet it plans against
+        (``no_motion_plan``, the motion plan's goal invalid at every base pose tried).
+        Another grasp or placement of the same action may be reached either way; a
+        start in contact or a search out of checks is no fault of the placement."""
+        if self.status is Status.IK_INFEASIBLE:
+            return True
+        return self.status is Status.NO_MOTION_PLAN and self.detail.startswith(GOAL_INVALID)
 
     def motion_of(self, joint: str) -> float:
         """``part_motion`` of ``joint`` (with or without the ``cabinet/`` prefix)."""

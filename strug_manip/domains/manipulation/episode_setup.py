@@ -27,7 +27,7 @@ from strug_manip.control import (
     place_targets,
 )
 from strug_manip.domains.manipulation.actions import part_at_point, part_point
-from strug_manip.domains.manipulation.grounding import cannot_reach, first_feasible, position
+from strug_manip.domains.manipulation.grounding import first_feasible, position
 from strug_manip.domains.manipulation.rules import dragged, inside, open_enough
 from strug_manip.objects.generator import CabinetSpec
 from strug_manip.objects.hypotheses import BelievedJoint
@@ -139,7 +139,7 @@ def _opens(world: ManipulationWorld, part, ctx: ControlContext) -> bool:
         return opening(g, joint).run(world, ctx=ctx)
 
     out = first_feasible(functools.partial(run, g) for g in handle_grasps(part, 0.0, T))
-    if out is None or cannot_reach(out):
+    if out is None or out.cannot_reach:
         return False
     q = position(world, part.joint)
     return (

@@ -20,11 +20,9 @@ from strug_manip.control import (
     PullH,
     PullV,
     Push,
-    Status,
     handle_grasps,
     place_targets,
 )
-from strug_manip.control.motion import GOAL_INVALID
 from strug_manip.domains.manipulation.actions import TABLE, ManipAction, part_point
 from strug_manip.domains.manipulation.catalogue import Catalogue, Root
 from strug_manip.domains.manipulation.rules import UNCHANGED, dragged, inside
@@ -51,11 +49,12 @@ def skills(
     holder: int | None = None,
 ) -> tuple[list, ManipulationWorld | None]:
     """The skills to try in turn (each next grasp or placement while the previous
-    cannot be reached: :func:`cannot_reach`) and the planning world, for ``a`` on
-    particle ``i`` in ``sim`` (on the real robot: ``i`` is the model it plans in,
-    ``sim`` its state). An opening or a probe follows ``holder``'s grasp and joint
-    and plans in its likeliest state (default: the hypothesis's representative,
-    :meth:`.Root.rep`). ``home``: where ``Place(table)`` puts the object back, (4, 4)."""
+    cannot be reached: :attr:`~strug_manip.control.Outcome.cannot_reach`) and the
+    planning world, for ``a`` on particle ``i`` in ``sim`` (on the real robot: ``i``
+    is the model it plans in, ``sim`` its state). An opening or a probe follows
+    ``holder``'s grasp and joint and plans in its likeliest state (default: the
+    hypothesis's representative, :meth:`.Root.rep`). ``home``: where
+    ``Place(table)`` puts the object back, (4, 4)."""
     if a.skill == "Pick":
         # The object's table is far from the cabinet: one planning world serves
         # every model, so the base placement is found once for all of them.
@@ -181,20 +180,9 @@ def attempt(run: Callable[[], Outcome]) -> Outcome | None:
         return None
 
 
-def cannot_reach(out: Outcome) -> bool:
-    """``out`` stopped before anything moved because its grasp or placement cannot be
-    reached: no base pose and arm reach it (``ik_infeasible``), or where they would,
-    the arm or what it carries touches the cabinet it plans against (``no_motion_plan``
-    with the motion plan's goal invalid, after every base pose was tried). Another
-    grasp or placement of the same action may be reached either way."""
-    if out.status == Status.IK_INFEASIBLE:
-        return True
-    return out.status == Status.NO_MOTION_PLAN and out.detail.startswith(GOAL_INVALID)
-
-
 def first_feasible(runs: Iterable[Callable[[], Outcome]]) -> Outcome | None:
     """The outcome of the first of ``runs`` (callables, each a skill with its next
-    grasp or placement) that can be reached (:func:`cannot_reach`), else the last
+    grasp or placement) that can be reached (``Outcome.cannot_reach``), else the last
     one's (None when it could not be planned: :func:`attempt`).
 
     A goal the arm cannot reach without touching the cabinet counts as unreachable
@@ -207,6 +195,6 @@ def first_feasible(runs: Iterable[Callable[[], Outcome]]) -> Outcome | None:
     out = None
     for run in runs:
         out = attempt(run)
-        if out is not None and not cannot_reach(out):
+        if out is not None and not out.cannot_reach:
             break
     return out
