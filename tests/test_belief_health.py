@@ -38,9 +38,12 @@ def _step(i: int, action: str = "OpenDrawer(part@(y=+0.00, z=1.06) as drawer)", 
     return {**out, **kw}
 
 
-def _record(steps: list[dict], models: int = 3, lost_at: int | None = None, **kw) -> dict:
+def _record(
+    steps: list[dict], models: int = 3, lost_at: int | None = None, catalogued: int = 5, **kw
+) -> dict:
     health = {"target": "link_1", "max_steps": 4, "lost_weight": LOST_WEIGHT,
-              "initial": {"weight": 0.5 if models else 0.0, "models": models},
+              "initial": {"weight": 0.5 if models else 0.0, "models": models,
+                          "catalogued": catalogued},
               "lost_at": lost_at, "steps": steps}  # fmt: skip
     rec = {"domain": "opendrawer", "solver": "strug", "seed": 9, "return": 0.0,
            "steps": len(steps), "seconds": 10.0, "mean_sims": 2.0, "plan_seconds_median": 1.0,
@@ -53,6 +56,12 @@ def test_each_failure_gets_the_first_belief_health_cause_that_applies() -> None:
     ok4 = [_step(i) for i in range(4)]
     assert E.health_cause(_record(ok4, success=True)) == "success"
     assert E.health_cause(_record(ok4, models=0)) == E.MISSING
+    # The true hinge held, but no model's target part has a handle: nothing acts on it.
+    assert E.health_cause(_record(ok4, catalogued=0)) == E.NO_ACTION
+    assert E.health_flags(_record(ok4, models=0, catalogued=0))[:2] == [E.MISSING, E.NO_ACTION]
+    before = _record(ok4)
+    del before["report"]["health"]["initial"]["catalogued"]  # a record from before it
+    assert E.health_cause(before) == E.OUT_OF_STEPS
     grasp = [float(STATUS_CODES["grasp_lost"]), 0.0, 1.0, 0.0, 0.0]  # the handle moved 5 cm
     dropped = [
         _step(0, real_key=grasp, real_status="grasp_lost", target_after=0.002),
@@ -95,6 +104,7 @@ def test_the_episode_records_its_belief_health_step_by_step(drawer_record: dict)
     steps = h["steps"]
     assert [s["action"] for s in steps] == drawer_record["actions"]
     assert h["target"] == "link_1" and 0 < h["initial"]["models"] < 6
+    assert h["initial"]["catalogued"] >= h["initial"]["models"]  # every drawer has a handle
     assert steps[0]["target_before"] == pytest.approx(h["initial"]["weight"])
     for a, b in itertools.pairwise(steps):  # the weights carry over
         assert b["target_before"] == pytest.approx(a["target_after"])

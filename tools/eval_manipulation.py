@@ -39,6 +39,11 @@ decomposed into causes a user can act on, per episode the first of (:func:`healt
 
 * ``true hypothesis missing from the initial belief``: no particle's target part has the
   real target's joint (type, axis within 10 deg, hinge or origin within 5 cm);
+* ``no action on the target part: no model shows its handle``: no particle's target part
+  is catalogued (perception gave it no handle in any model, so no opening, probe or
+  ``Place`` names it), whatever its joint (OpenDoor episode 9963: a lift-up flap with a
+  knob, the true hinge in half the models; the robot could only pick the object and put
+  it back);
 * ``belief dropped the true hypothesis``: after a step its weight fell below 1 %
   (:data:`~strug_manip.domains.manipulation.health.LOST_WEIGHT`), named by the skill and
   the key that did it: the real status against the one the twin of the best true
@@ -84,6 +89,7 @@ from strug_manip.experiments.seeds import seed_range
 TIME_PARTS = ("twin", "render", "likelihood", "real", "perception", "setup")
 #: The belief-health causes, in the order an episode's is looked for.
 MISSING = "true hypothesis missing from the initial belief"
+NO_ACTION = "no action on the target part: no model shows its handle"
 DROPPED = "belief dropped the true hypothesis"
 SKILL_FAILED = "skill failed under the right hypothesis"
 REPEATED = "same action repeated without news"
@@ -140,6 +146,8 @@ def health_flags(record: dict) -> list[str]:
     steps, out = h["steps"], []
     if h["initial"]["models"] == 0:
         out.append(MISSING)
+    if h["initial"].get("catalogued", 1) == 0:  # records before 2026-12-06 lack it
+        out.append(NO_ACTION)
     lost = next((s for s in steps if s["step"] == h["lost_at"]), None)
     if lost is not None:
         out.append(f"{DROPPED}: {_skill(lost['action'])} {drop_key(lost)}")

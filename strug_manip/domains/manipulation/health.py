@@ -15,10 +15,11 @@ cell holds it; ``Pick`` and ``Place(table)`` touch the target).
 
 :class:`HealthRecorder` keeps, per episode (the report's ``health``,
 :meth:`HealthRecorder.as_dict`): the initial weight of the true target hypothesis and
-how many models hold it; per real step (:class:`StepHealth`) the true hypotheses'
-weights before and after the step's update, the model the real robot planned in and
-whether it holds the true hypothesis, and the key the twin of the best particle of the
-true hypothesis (the likeliest before the step) predicted against the real key
+how many models hold it, and how many models' target part an action can act on; per
+real step (:class:`StepHealth`) the true hypotheses' weights before and after the
+step's update, the model the real robot planned in and whether it holds the true
+hypothesis, and the key the twin of the best particle of the true hypothesis (the
+likeliest before the step) predicted against the real key
 (:data:`~.state.ManipObservation.key`); and ``lost_at``, the first step after which the
 true target hypothesis held less than :data:`LOST_WEIGHT`.
 
@@ -152,6 +153,9 @@ class HealthRecorder:
         self._parts: dict[int, tuple[str | None, np.ndarray | None]] = {}
         #: The initial belief's weight on the true target hypothesis, and its holders.
         self.initial = (self._weight(initial, self._target), int(self._target.sum()))
+        #: How many models' target part an action can act on (a catalogued part: one
+        #: with a handle, or a shelf's cell; :func:`.actions.part_point`).
+        self.catalogued = sum(cat.target_index(i) is not None for i in range(len(w)))
         self.steps: list[StepHealth] = []
         self._pending: tuple[int, np.ndarray | None] | None = None
 
@@ -234,7 +238,11 @@ class HealthRecorder:
             "target": self.target,
             "max_steps": self.max_steps,
             "lost_weight": LOST_WEIGHT,
-            "initial": {"weight": self.initial[0], "models": self.initial[1]},
+            "initial": {
+                "weight": self.initial[0],
+                "models": self.initial[1],
+                "catalogued": self.catalogued,
+            },
             "lost_at": self.lost_at(),
             "steps": [dataclasses.asdict(h) for h in self.steps],
         }
