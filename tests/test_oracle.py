@@ -131,5 +131,5 @@ def test_an_oracle_episode_runs_with_one_particle():
     finally:
         d.close()
     assert len(res.steps) == 1
-    assert report["health"]["initial"] == {"weight": 1.0, "models": 1}
+    assert report["health"]["initial"] == {"weight": 1.0, "models": 1, "catalogued": 1}
     assert [s["planned_true"] for s in report["health"]["steps"]] == [True]
