@@ -84,6 +84,7 @@ from strug_manip.control import (
 )
 from strug_manip.control.params import DEFAULT_PARAMS
 from strug_manip.control.twin_body import TIMESTEP as TWIN_STEP
+from strug_manip.domains.manipulation.grounding import first_feasible
 from strug_manip.domains.manipulation.rules import dragged, inside, open_enough
 from strug_manip.experiments.seeds import seed_range
 from strug_manip.objects.hypotheses import BelievedJoint, believed_spec, cell_joints, model_of
@@ -240,10 +241,12 @@ def evaluate_part(world, twins: dict, spec, part, ctx, only_twin: bool = False) 
         pick = Pick("object", tgts[0].grasp).run(world, ctx=ctx)
         chain = {"pick": str(pick.status), "place": None, "ok": False}
         if pick.ok:
-            for tgt in tgts:  # the next where no base placement reaches one (no motion)
-                place = Place.onto(tgt).run(world, ctx=ctx)
-                if not place.cannot_reach:
-                    break
+            # The targets in turn, as the robot takes them (the next while one cannot
+            # be reached: nothing moved).
+            place = first_feasible(
+                functools.partial(Place.onto(t).run, world, ctx=ctx) for t in tgts
+            )
+            assert place is not None
             chain["place"] = str(place.status)
             q2 = world.part_positions()[joint_name]
             T2 = world.body_pose(world.scene.cabinet_prefix + world.scene.cabinet.root)
