@@ -18,8 +18,15 @@ from strug_manip.domains import MANIPULATION_DOMAINS, make_domain
 from strug_manip.domains.manipulation import episode_setup
 from strug_manip.domains.manipulation.actions import TABLE, ManipAction, part_kind
 from strug_manip.domains.manipulation.catalogue import representatives
-from strug_manip.domains.manipulation.conditioning import swing
-from strug_manip.domains.manipulation.grounding import cabinet_frame, handle_point
+from strug_manip.domains.manipulation.conditioning import (
+    SAME_HINGE,
+    Front,
+    condition,
+    longest_limit,
+    passed_limits,
+    swing,
+)
+from strug_manip.domains.manipulation.grounding import cabinet_frame, handle_point, position
 from strug_manip.domains.manipulation.health import status_of
 from strug_manip.domains.manipulation.real import MATCH_RADIUS, REAL_PLAN_MODELS
 from strug_manip.domains.manipulation.rules import BEFORE_MOTION, REPEATS_ITSELF, UNCHANGED
@@ -331,14 +338,65 @@ def test_a_part_the_real_robot_sees_shut_is_shut_in_every_particle(shut_episode)
                 if link != left_open:
                     assert q == pytest.approx(0.0), (k, own)
                     continue
-                local = tw.world.cabinet_pose()[:3, :3].T @ out[k]
+                R = tw.world.cabinet_pose()[:3, :3]
+                local = R.T @ out[k].offset
                 seen = local @ p.axis if p.joint_type == "prismatic" else swing(p, local)
+                turn = out[k].turn
+                if turn is not None and abs((R.T @ turn[0]) @ p.axis) >= SAME_HINGE:
+                    seen = 0.1 * np.sign((R.T @ turn[0]) @ p.axis)  # the front's own angle
                 assert q == pytest.approx(np.clip(seen, p.lower, p.upper), abs=1e-9), (k, own)
                 if p.joint_type == real_open.joint_type == "prismatic":  # to the axes' tilt
                     assert q == pytest.approx(min(0.1, p.upper), abs=0.005), (k, own)
     finally:
         rw.restore(s0.sim)
         d.environment.condition(belief)
+
+
+def test_a_part_the_real_front_passed_the_limit_of_gets_the_limit_the_front_showed(
+    shut_episode,
+):
+    """A real front seen beyond a particle's limit moves that limit to the front (up
+    to the longest the generator gives such a part): the particle keeps its weight, its
+    twin is rebuilt with the new limit, its part stands where the front does, and the
+    outcomes simulated under the old limit are dropped. A front short of every limit
+    changes no particle."""
+    d, s0, belief = shut_episode
+    w, rw = d.worlds, d.real.world
+    rw.restore(s0.sim)
+    k, i, link = next(
+        (k, s.origin, link)
+        for k, part in enumerate(d.parts)
+        for s in belief.states
+        if (link := part.links[s.origin]) is not None
+        and w.particles[s.origin].spec.part(link).joint_type == "prismatic"
+    )
+    p = w.particles[i].spec.part(link)
+    R = (rw.cabinet_pose() @ np.linalg.inv(rw.scene.T_world_cabinet) @ w.pose(i))[:3, :3]
+    short = {k: Front(R @ (0.5 * p.upper * np.asarray(p.axis)))}
+    assert passed_limits(d.parts, i, short, w.particles[i].spec, R) == {}
+    far = p.upper + 0.05
+    fronts = {k: Front(R @ (far * np.asarray(p.axis)))}
+    assert passed_limits(d.parts, i, fronts, w.particles[i].spec, R) == {
+        link: pytest.approx(min(far, longest_limit(p)))
+    }
+    d.step(belief.states[0], ManipAction("Pick", grasp="top"), np.random.default_rng(0))
+    assert len(w.outcomes) > 0
+    twin = w.twins[i]
+    conditioned = condition(belief, rw, w, d.parts, [], fronts)
+    assert w.twins[i] is not twin and len(w.outcomes) == 0
+    np.testing.assert_array_equal(conditioned.weights, belief.weights)
+    wide = w.particles[i].spec.part(link)
+    assert wide.upper == pytest.approx(min(far, longest_limit(p)))
+    assert wide.upper > p.upper
+    m = w.twins[i].world.model
+    assert m.jnt_range[m.joint(w.twins[i].world.scene.cabinet_prefix + p.joint).id][1] == (
+        pytest.approx(wide.upper)
+    )
+    for s in conditioned.states:
+        if s.origin == i:
+            w.twins[i].restore(s.sim)
+            assert position(w.twins[i].world, p.joint) == pytest.approx(wide.upper, abs=1e-6)
+    assert longest_limit(p) == pytest.approx(p.interior_size[0])
 
 
 def test_a_turn_about_a_hinge_is_read_back_from_the_handles_offset():

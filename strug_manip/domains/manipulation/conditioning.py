@@ -23,6 +23,7 @@ particle, and every later Place aims into it.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -33,7 +34,8 @@ from strug_manip.domains.manipulation.actions import CataloguePart
 from strug_manip.domains.manipulation.grounding import position
 from strug_manip.domains.manipulation.state import ManipState
 from strug_manip.domains.manipulation.worlds import ParticleWorlds
-from strug_manip.objects.generator import PartSpec
+from strug_manip.objects import generator as gen
+from strug_manip.objects.generator import CabinetSpec, PartSpec
 from strug_manip.robot.fetch import BASE_JOINTS, GRIPPER_SITE
 from strug_manip.world.sim import OBJECT_JOINT, ManipulationWorld
 
@@ -41,6 +43,28 @@ from strug_manip.world.sim import OBJECT_JOINT, ManipulationWorld
 #: the head camera's cloud shows a front flush with the carcass to about a centimetre,
 #: and 0.1 rad is 2 cm at the edge of a 0.2 m door.
 SHUT = {"prismatic": 0.02, "revolute": 0.1}
+#: A particle's hinge counts as the real front's turning axis within 15 degrees
+#: (cosine): its part then takes the front's angle, not the handle's.
+SAME_HINGE = float(np.cos(np.radians(15.0)))
+#: A real front this far beyond a particle's limit has passed it, by joint type [m or
+#: rad]: the cloud places a front to about a centimetre, 0.05 rad at 0.2 m from a hinge.
+PASSED = {"prismatic": 0.01, "revolute": 0.05}
+
+
+@dataclass(frozen=True)
+class Front:
+    """A real front that stands open, as the head camera shows it, in the cabinet as it
+    stands now.
+
+    Attributes:
+        offset: how far its handle is out of where it is shut, world (3,) [m].
+        turn: for a front that turns (a door or a flap), the axis, world (3,) unit,
+            and the angle [rad] that take the shut front's outward normal to the open
+            front's; None for a drawer's (it is not turned).
+    """
+
+    offset: np.ndarray
+    turn: tuple[np.ndarray, float] | None = None
 
 
 def condition(
@@ -49,25 +73,33 @@ def condition(
     w: ParticleWorlds,
     parts: Sequence[CataloguePart],
     shut: Sequence[int],
-    out: Mapping[int, np.ndarray] | None = None,
+    fronts: Mapping[int, Front] | None = None,
 ) -> ParticleBelief:
     """``belief`` given what the real world ``real`` shows for certain (module
     docstring); ``shut``: the catalogued parts whose real part stands shut
-    (:func:`is_shut`); ``out``: how far the real handle of each catalogued part that
-    stands open is out of where it is shut, world (3,) [m] (:func:`as_seen`)."""
-    out = {} if out is None else out
+    (:func:`is_shut`); ``fronts``: the real fronts of the catalogued parts that stand
+    open (:func:`as_seen`). A particle whose part a real front has passed the limit of
+    gets the limit the front showed first (:func:`passed_limits`,
+    :meth:`.ParticleWorlds.widen`): its twin is rebuilt."""
+    fronts = {} if fronts is None else fronts
     base = np.array([real.robot_qpos()[j] for j in BASE_JOINTS])
     moved = real.cabinet_pose() @ np.linalg.inv(real.scene.T_world_cabinet)
     holding = holds_object(real)
     known = [] if holding else [OBJECT_JOINT]
     T_go = np.linalg.inv(real.site_pose(GRIPPER_SITE)) @ real.object_pose() if holding else None
+    for i in sorted({s.origin for s in belief.states}):
+        R = (moved @ w.pose(i))[:3, :3]
+        wider = passed_limits(parts, i, fronts, w.particles[i].spec, R)
+        if wider:
+            w.widen(i, wider)
 
     def edit(tw: PlanningTwin, s: ManipState) -> None:
         tw.world.set_cabinet_pose(moved @ tw.world.scene.T_world_cabinet)
         tw.world.copy_joints(real, known)
         tw.set_robot_base(base)
+        spec, R = tw.world.scene.cabinet_spec, tw.world.cabinet_pose()[:3, :3]
         opened = _opened(parts, s.origin, shut, tw.world)
-        opened |= as_seen(parts, s.origin, out, tw.world)
+        opened |= as_seen(parts, s.origin, fronts, spec, R)
         if opened:
             tw.world.set_parts(opened)
         if T_go is not None and not holds_object(tw.world):
@@ -105,12 +137,15 @@ def _opened(
 
 
 def as_seen(
-    parts: Sequence[CataloguePart], i: int, out: Mapping[int, np.ndarray], world: ManipulationWorld
+    parts: Sequence[CataloguePart],
+    i: int,
+    fronts: Mapping[int, Front],
+    spec: CabinetSpec,
+    R: np.ndarray,
 ) -> dict[str, float]:
-    """Particle ``i``'s parts (in its twin's ``world``) at the catalogued parts ``out``
-    (a real handle's offset from where it is shut, world (3,) [m]), each moved as far
-    as its own joint takes its handle by that offset, within its limits, by joint name:
-    a drawer along its own axis, a door about its own hinge.
+    """Particle ``i``'s parts (of its cabinet ``spec``, turned by ``R`` (3, 3) in the
+    world) where the real ``fronts`` of the catalogued parts stand, within their
+    limits, by joint name (:func:`seen_positions`).
 
     A twin ends an opening where its own limit or its own model of the pull stops it,
     and a real part may move after (a door the arm swung back as it went for the
@@ -122,22 +157,83 @@ def as_seen(
     1.31 to 0.73 rad while the robot picked the object, every particle held it wide
     open, and the Place struck it and slid the cabinet (OpenDoor episode 9626).
     """
-    spec, R = world.scene.cabinet_spec, world.cabinet_pose()[:3, :3]
+    seen = seen_positions(parts, i, fronts, spec, R)
+    return {(p := spec.part(k)).joint: float(np.clip(v, p.lower, p.upper)) for k, v in seen.items()}
+
+
+def seen_positions(
+    parts: Sequence[CataloguePart],
+    i: int,
+    fronts: Mapping[int, Front],
+    spec: CabinetSpec,
+    R: np.ndarray,
+) -> dict[str, float]:
+    """How far particle ``i``'s own joints (of ``spec``, its cabinet turned by ``R``
+    (3, 3) in the world) take its parts to where the real ``fronts`` stand [m or rad],
+    limits aside, by link: a drawer along its own axis as far as the real handle is
+    out; a door about its own hinge by the real front's angle where the front turned
+    about that hinge's line (within :data:`SAME_HINGE`), else as far as the turn takes
+    its handle by the real handle's offset (:func:`swing`). A particle whose hinge is a
+    few centimetres off the real one gets the real angle from the front's plane; from
+    the handle alone it got angles 0.1-0.15 rad short (a flap the robot raised to 1.50
+    rad stood at 1.35-1.39 rad in the particles hinged on its line whose limits
+    allowed more, OpenDoor episode 9950), short of what the object needs."""
     q = {}
-    for k, d in out.items():
+    for k, f in fronts.items():
         link = parts[k].links[i]
         if link is None:
             continue
         p = spec.part(link)
-        local = R.T @ np.asarray(d, dtype=float)  # the offset in this particle's cabinet
+        local = R.T @ np.asarray(f.offset, dtype=float)  # in this particle's cabinet
         if p.joint_type == "prismatic":
-            v = float(local @ np.asarray(p.axis))
+            q[link] = float(local @ np.asarray(p.axis))
         elif p.joint_type == "revolute" and p.handle_pos is not None:
-            v = swing(p, local)
-        else:
-            continue
-        q[p.joint] = float(np.clip(v, p.lower, p.upper))
+            q[link] = swing(p, local)
+            if f.turn is not None:
+                along = float((R.T @ f.turn[0]) @ np.asarray(p.axis))
+                if abs(along) >= SAME_HINGE:  # hinged on the front's line: its angle
+                    q[link] = f.turn[1] * float(np.sign(along))
     return q
+
+
+def passed_limits(
+    parts: Sequence[CataloguePart],
+    i: int,
+    fronts: Mapping[int, Front],
+    spec: CabinetSpec,
+    R: np.ndarray,
+) -> dict[str, float]:
+    """The limits particle ``i``'s parts need where a real front stands beyond them
+    (:func:`seen_positions` more than :data:`PASSED` over the part's upper limit), by
+    link [m or rad]: the front's position, up to the longest limit such a part has
+    (:func:`longest_limit`).
+
+    No view shows how far a part goes; the particles draw it from the generator's
+    range. A real front seen beyond a particle's limit shows that limit wrong and
+    nothing about the rest of the particle (its hinge, its handle), so the limit moves
+    to what the front showed and the particle keeps its weight. Clipped to its own
+    limit, the part stood short of where the real one did: a flap the robot raised to
+    1.50 rad (its limit 1.55) stood at 1.25-1.30 rad in the particles hinged on its line
+    with those limits (half the weight), short of what the object needs, and the robot
+    opened it again to the end of the episode, moving nothing (OpenDoor episode 9950)."""
+    out = {}
+    for link, v in seen_positions(parts, i, fronts, spec, R).items():
+        p = spec.part(link)
+        if v > p.upper + PASSED[p.joint_type]:
+            out[link] = min(v, max(longest_limit(p), p.upper))
+    return out
+
+
+def longest_limit(part: PartSpec) -> float:
+    """The longest limit the generator gives a part like ``part`` [m or rad]: a
+    drawer's travel cannot exceed its box's depth (:attr:`PartSpec.interior_size`
+    along x), a door's and a flap's limits are drawn from ranges
+    (:data:`~strug_manip.objects.generator.DOOR_SIDE_LIMIT`,
+    :data:`~strug_manip.objects.generator.DOOR_FLAP_LIMIT`)."""
+    if part.joint_type == "prismatic":
+        return float(part.interior_size[0]) if part.interior_size is not None else part.upper
+    side = part.hinge in ("left", "right")
+    return (gen.DOOR_SIDE_LIMIT if side else gen.DOOR_FLAP_LIMIT)[1]
 
 
 def swing(part: PartSpec, d: np.ndarray) -> float:

@@ -66,6 +66,7 @@ from strug_manip.domains.manipulation.state import (
     observation_key,
 )
 from strug_manip.domains.manipulation.worlds import Timers
+from strug_manip.objects.generator import PartSpec
 from strug_manip.world.sim import CameraFrame, ManipulationWorld, WorldState
 from strug_manip.world.views import cabinet_cloud, look_poses, take_views
 
@@ -407,14 +408,16 @@ class RealEnvironment:
         nearest = int(np.argmin([np.linalg.norm(p.point - h) for p in self.model.parts]))
         return link if nearest == k else None
 
-    def fronts(self) -> tuple[list[int], dict[int, np.ndarray]]:
+    def fronts(self) -> tuple[list[int], dict[int, conditioning.Front]]:
         """Where the true cabinet's fronts stand now, per catalogued part with a true
         part there (:meth:`counterpart`): the catalogued parts whose true part stands shut
-        (:data:`~.conditioning.SHUT`), and for each that stands open how far its handle
-        is out of where it is shut, world (3,) [m], in the cabinet as it stands now. The
-        head camera's cloud shows a front flush or standing out of the carcass to about
-        a centimetre (taken from the simulator, as the carcass's motion is);
-        :func:`.conditioning.condition` moves each particle's part there."""
+        (:data:`~.conditioning.SHUT`), and each one that stands open as the head camera
+        shows it (:class:`~.conditioning.Front`: how far its handle is out of where it
+        is shut, and how a door's or a flap's front is turned), in the cabinet as it
+        stands now. The head camera's cloud shows a front flush or standing out of the
+        carcass to about a centimetre, and a flat front's plane best of all (taken from
+        the simulator, as the carcass's motion is); :func:`.conditioning.condition`
+        moves each particle's part there."""
         real = self._need_real()
         rw, spec = real.world, real.world.scene.cabinet_spec
         T = rw.cabinet_pose()
@@ -427,9 +430,10 @@ class RealEnvironment:
             if conditioning.is_shut(rw, part):
                 shut.append(k)
                 continue
-            now, closed = part.handle_at(position(rw, part.joint), T), part.handle_at(0.0, T)
+            q = position(rw, part.joint)
+            now, closed = part.handle_at(q, T), part.handle_at(0.0, T)
             if now is not None and closed is not None:  # a part with a handle
-                out[k] = now - closed
+                out[k] = conditioning.Front(now - closed, _turn(part, q, T[:3, :3]))
         return shut, out
 
     # --- reports -------------------------------------------------------------------------
@@ -459,3 +463,17 @@ class RealEnvironment:
 
     def _no_episode(self) -> ConfigError:
         return ConfigError(f"{self.model.name}: no episode yet (call reset first)")
+
+
+def _turn(part: PartSpec, q: float, R: np.ndarray) -> tuple[np.ndarray, float] | None:
+    """The axis, world (3,) (the cabinet turned by ``R``, (3, 3)), and the angle [rad]
+    that take ``part``'s shut front's outward normal (+x) to its normal at joint
+    position ``q``; None for a front that is not turned (a drawer's)."""
+    if part.joint_type != "revolute":
+        return None
+    n0 = np.array([1.0, 0.0, 0.0])
+    n1 = part.point_at(part.origin + n0, q) - part.point_at(part.origin, q)
+    c = np.cross(n0, n1)
+    if np.linalg.norm(c) < 1e-9:
+        return None
+    return R @ (c / np.linalg.norm(c)), float(np.arctan2(np.linalg.norm(c), n0 @ n1))

@@ -20,8 +20,8 @@ Caches (bounded, least recently used dropped first):
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -109,6 +109,29 @@ class ParticleWorlds:
         w.reset()
         w.copy_joints(tw.world, [*w.part_joints, w.scene.cabinet_prefix + "free"])
         return w
+
+    def widen(self, i: int, uppers: Mapping[str, float]) -> None:
+        """Particle ``i``'s cabinet with the upper limits of the parts ``uppers`` names
+        (link -> limit [m or rad]) raised to those values (never lowered): its
+        particle, its twin and its Fetch world rebuilt from the new description. Its
+        states stay valid (a limit changes no state's layout); the cached outcomes,
+        start checks and action relevances of every particle are dropped (those of
+        particle ``i`` were simulated under the old limits; keeping the others' saves
+        less than telling them apart costs, and it happens a few times an episode)."""
+        p = self.particles[i]
+        parts = tuple(
+            replace(q, upper=max(q.upper, float(uppers[q.link]))) if q.link in uppers else q
+            for q in p.spec.parts
+        )
+        spec = replace(p.spec, parts=parts)
+        self.particles[i] = replace(p, spec=spec)
+        old, self.twins[i] = self.twins[i], PlanningTwin(spec, self.config, self.ctx)
+        old.world.close()
+        fetch = self._fetch.pop(i, None)
+        if fetch is not None:
+            fetch.close()
+        for cache in (self.outcomes, self.can_start, self.relevance):
+            cache.clear()
 
     def predicted_cloud(self, i: int, state: WorldState, pose: LookPose) -> np.ndarray:
         """The head camera's cabinet cloud (N, 3) [m] particle ``i`` predicts in
