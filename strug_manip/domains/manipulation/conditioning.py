@@ -9,7 +9,8 @@ where perception put it) and, when the hand is empty, where the object rests (it
 tracked as well), which parts stand shut (a front flush with the carcass) and where
 the open ones' handles are (each particle's part is moved there along its own joint,
 a drawer along its axis, a door about its hinge: which way a part opens the camera
-does not show, where its front stands it does).
+does not show, where its front stands it does; a particle whose limit the real front
+has passed gets that limit moved to the front, as no view shows a part's limit).
 Each particle keeps its other parts' joints and, when the real hand holds the object,
 its own idea of the grasp; a particle whose hand is empty while the real one holds the
 object (its twin's Place went through where the real one stopped) gets the object back
