@@ -24,6 +24,7 @@ from strug_manip.domains.manipulation.conditioning import (
     condition,
     longest_limit,
     passed_limits,
+    seen_positions,
     swing,
 )
 from strug_manip.domains.manipulation.grounding import cabinet_frame, handle_point, position
@@ -373,10 +374,11 @@ def test_a_part_the_real_front_passed_the_limit_of_gets_the_limit_the_front_show
     p = w.particles[i].spec.part(link)
     R = (rw.cabinet_pose() @ np.linalg.inv(rw.scene.T_world_cabinet) @ w.pose(i))[:3, :3]
     short = {k: Front(R @ (0.5 * p.upper * np.asarray(p.axis)))}
-    assert passed_limits(d.parts, i, short, w.particles[i].spec, R) == {}
+    spec = w.particles[i].spec
+    assert passed_limits(seen_positions(d.parts, i, short, spec, R), spec) == {}
     far = p.upper + 0.05
     fronts = {k: Front(R @ (far * np.asarray(p.axis)))}
-    assert passed_limits(d.parts, i, fronts, w.particles[i].spec, R) == {
+    assert passed_limits(seen_positions(d.parts, i, fronts, spec, R), spec) == {
         link: pytest.approx(min(far, longest_limit(p)))
     }
     d.step(belief.states[0], ManipAction("Pick", grasp="top"), np.random.default_rng(0))

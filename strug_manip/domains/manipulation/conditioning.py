@@ -89,8 +89,8 @@ def condition(
     known = [] if holding else [OBJECT_JOINT]
     T_go = np.linalg.inv(real.site_pose(GRIPPER_SITE)) @ real.object_pose() if holding else None
     for i in sorted({s.origin for s in belief.states}):
-        R = (moved @ w.pose(i))[:3, :3]
-        wider = passed_limits(parts, i, fronts, w.particles[i].spec, R)
+        spec, R = w.particles[i].spec, (moved @ w.pose(i))[:3, :3]
+        wider = passed_limits(seen_positions(parts, i, fronts, spec, R), spec)
         if wider:
             w.widen(i, wider)
 
@@ -100,7 +100,7 @@ def condition(
         tw.set_robot_base(base)
         spec, R = tw.world.scene.cabinet_spec, tw.world.cabinet_pose()[:3, :3]
         opened = _opened(parts, s.origin, shut, tw.world)
-        opened |= as_seen(parts, s.origin, fronts, spec, R)
+        opened |= as_seen(seen_positions(parts, s.origin, fronts, spec, R), spec)
         if opened:
             tw.world.set_parts(opened)
         if T_go is not None and not holds_object(tw.world):
@@ -137,16 +137,10 @@ def _opened(
     return {p.joint: 0.0 for p in held if not is_shut(world, p)}
 
 
-def as_seen(
-    parts: Sequence[CataloguePart],
-    i: int,
-    fronts: Mapping[int, Front],
-    spec: CabinetSpec,
-    R: np.ndarray,
-) -> dict[str, float]:
-    """Particle ``i``'s parts (of its cabinet ``spec``, turned by ``R`` (3, 3) in the
-    world) where the real ``fronts`` of the catalogued parts stand, within their
-    limits, by joint name (:func:`seen_positions`).
+def as_seen(seen: Mapping[str, float], spec: CabinetSpec) -> dict[str, float]:
+    """The joint positions of a particle's parts (of its cabinet ``spec``) where the
+    real fronts stand (``seen``, by link: :func:`seen_positions`), within their limits,
+    by joint name.
 
     A twin ends an opening where its own limit or its own model of the pull stops it,
     and a real part may move after (a door the arm swung back as it went for the
@@ -158,7 +152,6 @@ def as_seen(
     1.31 to 0.73 rad while the robot picked the object, every particle held it wide
     open, and the Place struck it and slid the cabinet (OpenDoor episode 9626).
     """
-    seen = seen_positions(parts, i, fronts, spec, R)
     return {(p := spec.part(k)).joint: float(np.clip(v, p.lower, p.upper)) for k, v in seen.items()}
 
 
@@ -197,17 +190,11 @@ def seen_positions(
     return q
 
 
-def passed_limits(
-    parts: Sequence[CataloguePart],
-    i: int,
-    fronts: Mapping[int, Front],
-    spec: CabinetSpec,
-    R: np.ndarray,
-) -> dict[str, float]:
-    """The limits particle ``i``'s parts need where a real front stands beyond them
-    (:func:`seen_positions` more than :data:`PASSED` over the part's upper limit), by
-    link [m or rad]: the front's position, up to the longest limit such a part has
-    (:func:`longest_limit`).
+def passed_limits(seen: Mapping[str, float], spec: CabinetSpec) -> dict[str, float]:
+    """The limits a particle's parts (of its cabinet ``spec``) need where the real
+    fronts stand beyond them (``seen``, by link: :func:`seen_positions`, more than
+    :data:`PASSED` over the part's upper limit), by link [m or rad]: the front's
+    position, up to the longest limit such a part has (:func:`longest_limit`).
 
     No view shows how far a part goes; the particles draw it from the generator's
     range. A real front seen beyond a particle's limit shows that limit wrong and
@@ -218,7 +205,7 @@ def passed_limits(
     with those limits (half the weight), short of what the object needs, and the robot
     opened it again to the end of the episode, moving nothing (OpenDoor episode 9950)."""
     out = {}
-    for link, v in seen_positions(parts, i, fronts, spec, R).items():
+    for link, v in seen.items():
         p = spec.part(link)
         if v > p.upper + PASSED[p.joint_type]:
             out[link] = min(v, max(longest_limit(p), p.upper))
