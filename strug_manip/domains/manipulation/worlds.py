@@ -114,10 +114,11 @@ class ParticleWorlds:
         """Particle ``i``'s cabinet with the upper limits of the parts ``uppers`` names
         (link -> limit [m or rad]) raised to those values (never lowered): its
         particle, its twin and its Fetch world rebuilt from the new description. Its
-        states stay valid (a limit changes no state's layout); the cached outcomes,
-        start checks and action relevances of every particle are dropped (those of
-        particle ``i`` were simulated under the old limits; keeping the others' saves
-        less than telling them apart costs, and it happens a few times an episode)."""
+        states stay valid (a limit changes no state's layout), and so do its predicted
+        clouds (a limit does not show). The cached outcomes, start checks and action
+        relevances are dropped, every particle's and not only ``i``'s (simulated under
+        the old limits): a particle's limit moves at most once per part a real front
+        passes, and a search refills them."""
         p = self.particles[i]
         parts = tuple(
             replace(q, upper=max(q.upper, float(uppers[q.link]))) if q.link in uppers else q
