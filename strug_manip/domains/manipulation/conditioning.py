@@ -88,9 +88,12 @@ def condition(
     holding = holds_object(real)
     known = [] if holding else [OBJECT_JOINT]
     T_go = np.linalg.inv(real.site_pose(GRIPPER_SITE)) @ real.object_pose() if holding else None
+    # Where each particle's parts stand by the real fronts (a limit does not change it).
+    seen = {}
     for i in sorted({s.origin for s in belief.states}):
-        spec, R = w.particles[i].spec, (moved @ w.pose(i))[:3, :3]
-        wider = passed_limits(seen_positions(parts, i, fronts, spec, R), spec)
+        spec = w.particles[i].spec
+        seen[i] = seen_positions(parts, i, fronts, spec, (moved @ w.pose(i))[:3, :3])
+        wider = passed_limits(seen[i], spec)
         if wider:
             w.widen(i, wider)
 
@@ -98,9 +101,8 @@ def condition(
         tw.world.set_cabinet_pose(moved @ tw.world.scene.T_world_cabinet)
         tw.world.copy_joints(real, known)
         tw.set_robot_base(base)
-        spec, R = tw.world.scene.cabinet_spec, tw.world.cabinet_pose()[:3, :3]
         opened = _opened(parts, s.origin, shut, tw.world)
-        opened |= as_seen(seen_positions(parts, s.origin, fronts, spec, R), spec)
+        opened |= as_seen(seen[s.origin], tw.world.scene.cabinet_spec)
         if opened:
             tw.world.set_parts(opened)
         if T_go is not None and not holds_object(tw.world):

@@ -466,14 +466,9 @@ class RealEnvironment:
 
 
 def _turn(part: PartSpec, q: float, R: np.ndarray) -> tuple[np.ndarray, float] | None:
-    """The axis, world (3,) (the cabinet turned by ``R``, (3, 3)), and the angle [rad]
-    that take ``part``'s shut front's outward normal (+x) to its normal at joint
-    position ``q``; None for a front that is not turned (a drawer's)."""
+    """How ``part``'s front at joint position ``q`` is turned from shut: the hinge's
+    axis, world (3,) (the cabinet turned by ``R``, (3, 3)), and the angle [rad]; None
+    for a front that is not turned (a drawer's)."""
     if part.joint_type != "revolute":
         return None
-    n0 = np.array([1.0, 0.0, 0.0])
-    n1 = part.point_at(part.origin + n0, q) - part.point_at(part.origin, q)
-    c = np.cross(n0, n1)
-    if np.linalg.norm(c) < 1e-9:
-        return None
-    return R @ (c / np.linalg.norm(c)), float(np.arctan2(np.linalg.norm(c), n0 @ n1))
+    return R @ np.asarray(part.axis, dtype=float), float(q)
