@@ -213,16 +213,19 @@ def test_a_drawer_out_of_reach_from_above_is_skimmed_then_dropped_into() -> None
     its places let go DROPS above the floor, the object's top DROP_BELOW_WALLS or more
     under the walls' top, lowered into from as high as the first over the walls; a
     shallower box adds
-    fewer or none; last come the same heights with the object TIGHT_GAP from the front
-    wall; every target's object centre is inside the drawer."""
+    fewer or none; then come the same heights with the object TIGHT_GAP from the front
+    wall; last, the object leaning (LEAN) from each height but the drops; every target's
+    object centre is inside the drawer."""
     from strug_manip.control.targets import DROP_BELOW_WALLS, DROPS, SKIM_OVER, TIGHT_GAP, rim
 
     spec, T = generate_cabinet(88, kinds=("drawer",)), np.eye(4)  # 8.5 to 29 cm deep
     h = 2 * OBJECT_HALF_SIZE[2]
-    added, tights = [], []
+    added, tights, leans = [], [], []
     for part in spec.movable_parts:
         q = 0.9 * part.upper
-        targets = place_targets(spec, part.link, q, T)
+        everything = place_targets(spec, part.link, q, T)
+        targets = tuple(t for t in everything if t.p[2, 2] > 1.0 - 1e-9)  # level
+        assert everything[: len(targets)] == targets  # the leaning ones come last
         n = 2 if targets[1].p[0, 3] > targets[0].p[0, 3] else 1  # places per height
         walls = float(part.interior_size[2])
         floor = part.point_at(part.interior_center, q)[2] - walls / 2
@@ -254,10 +257,37 @@ def test_a_drawer_out_of_reach_from_above_is_skimmed_then_dropped_into() -> None
             start = t.p[2, 3] + t.lift
             walls_first = targets[(high - 2) * n]  # lowered from ABOVE_WALLS over them
             assert start == pytest.approx(walls_first.p[2, 3] + walls_first.lift)
-        for t in targets:
+        for t in everything:
             assert inside(spec, part.link, q, T, t.p)
+        leaning = everything[len(targets) :]
+        check_leaning(leaning, targets[: (high + len(SKIM_OVER)) * n : n], floor, front_wall)
+        leans.append(len(leaning))
     assert min(added) == 0 and max(added) == len(DROPS), added
     assert max(tights) > 0, tights
+    assert max(leans) > 0, leans
+
+
+def check_leaning(leaning: tuple, level: tuple, floor: float, front_wall: float) -> None:
+    """Leaning places: one per level start but the drops (from the same heights), the
+    object tilted LEAN with its top toward the front (+x), its lowest edge LEAN_LOWEST
+    over the floor and its tilted footprint CLEARANCE inside the front wall."""
+    from strug_manip.control.targets import LEAN, LEAN_LOWEST
+
+    if not leaning:
+        return
+    hx, _, hz = OBJECT_HALF_SIZE
+    assert len(leaning) == len(level)
+    for t, same in zip(leaning, level, strict=True):
+        up = t.p[:3, 2]
+        assert up == pytest.approx([np.sin(LEAN), 0.0, np.cos(LEAN)])
+        assert t.p[2, 3] - hx * np.sin(LEAN) - hz * np.cos(LEAN) == pytest.approx(
+            floor + LEAN_LOWEST
+        )
+        assert t.p[0, 3] + hx * np.cos(LEAN) + hz * np.sin(LEAN) == pytest.approx(
+            front_wall - CLEARANCE
+        )
+        assert t.p[2, 3] + t.lift == pytest.approx(max(same.p[2, 3] + same.lift, t.p[2, 3]))
+        assert (t.grasp, t.skim) == ("top", same.skim)
 
 
 def _drop_down_flaps(seeds: range) -> list:

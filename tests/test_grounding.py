@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from strug_manip.control import Outcome, Status
-from strug_manip.control.motion import GOAL_INVALID, NO_PLAN, START_INVALID
+from strug_manip.control.motion import GOAL_INVALID, NO_PLAN, START_INVALID, WALL_CAP_HIT
 from strug_manip.domains.manipulation.grounding import (
     first_feasible,
     longest_travel,
@@ -48,10 +48,19 @@ def test_a_goal_that_touches_the_cabinet_passes_to_the_next_placement() -> None:
     assert tried([outcome(Status.IK_INFEASIBLE), blocked]) == (blocked, 2)
 
 
+def test_a_search_out_of_checks_passes_to_the_next_placement() -> None:
+    # A goal in a narrow gap: the next placement may be reached (oracle OpenDrawer 9983).
+    timeout = outcome(Status.NO_MOTION_PLAN, f"{NO_PLAN}: OMPL status: Timeout")
+    ok = outcome(Status.OK)
+    assert timeout.cannot_reach
+    assert tried([timeout, timeout, ok]) == (ok, 3)
+
+
 def test_a_plan_that_fails_for_another_reason_ends_the_action() -> None:
-    # A start in contact, or a search that ran out of checks, is no fault of the
-    # placement (and the next would spend the same budget): the robot stops there.
-    for detail in (f"{START_INVALID}: contacts: a/b", f"{NO_PLAN}: Timeout"):
+    # A start in contact is no fault of the placement, and a search the wall-clock cap
+    # stopped is the load's: the robot stops there.
+    capped = f"{NO_PLAN}: OMPL status: Timeout; {WALL_CAP_HIT}"
+    for detail in (f"{START_INVALID}: contacts: a/b", capped):
         stop = outcome(Status.NO_MOTION_PLAN, detail)
         assert not stop.cannot_reach
         assert tried([stop, outcome(Status.OK)]) == (stop, 1)

@@ -32,7 +32,7 @@ from enum import StrEnum
 
 import numpy as np
 
-from strug_manip.control.motion import GOAL_INVALID
+from strug_manip.control.motion import GOAL_INVALID, NO_PLAN, WALL_CAP_HIT
 
 
 class Status(StrEnum):
@@ -119,12 +119,19 @@ class Outcome:
         """It stopped before anything moved because its grasp or placement cannot be
         reached: no base pose and arm reach it (``ik_infeasible``), or where they
         would, the arm or what it carries touches the cabinet it plans against
-        (``no_motion_plan``, the motion plan's goal invalid at every base pose tried).
-        Another grasp or placement of the same action may be reached either way; a
-        start in contact or a search out of checks is no fault of the placement."""
+        (``no_motion_plan``, the motion plan's goal invalid at every base pose tried),
+        or the motion plan's search spent its checks without a way there (a goal in a
+        narrow gap: two level places in a drawer out 15.5 cm under another timed out
+        where the place nearest the drawer's front, tried after them, was reached;
+        oracle OpenDrawer episode 9983). Another grasp or placement of the same action
+        may be reached either way; a start in contact is no fault of the placement,
+        and a search the wall-clock cap stopped is the machine's load's, not the
+        goal's."""
         if self.status is Status.IK_INFEASIBLE:
             return True
-        return self.status is Status.NO_MOTION_PLAN and self.detail.startswith(GOAL_INVALID)
+        if self.status is not Status.NO_MOTION_PLAN or WALL_CAP_HIT in self.detail:
+            return False
+        return self.detail.startswith((GOAL_INVALID, NO_PLAN))
 
     def motion_of(self, joint: str) -> float:
         """``part_motion`` of ``joint`` (with or without the ``cabinet/`` prefix)."""

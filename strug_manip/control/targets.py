@@ -97,6 +97,15 @@ DROP_BELOW_WALLS = 0.05
 #: wall it met the knob at every target (``ik_infeasible``); 5 mm from it the object
 #: was placed.
 TIGHT_GAP = 0.005
+#: Where nothing level is reachable, a drawer's object is held leaning by this [rad]
+#: about the drawer's width, its top toward the robot: the wrist, 0.19 m above the
+#: object's centre along the grasp, stands 6 cm farther out, in front of the drawer
+#: above and its knob, which a level hand over a drawer out 15.5 cm under another meets
+#: at every place (oracle OpenDrawer episodes 9983, 9988).
+LEAN = 0.35
+#: The leaning object's lowest edge is let go this high over the box's floor [m]; it
+#: drops onto that edge and falls back flat, its centre behind the edge.
+LEAN_LOWEST = 0.01
 
 
 @dataclass(frozen=True)
@@ -268,12 +277,33 @@ def place_targets(
     starts += [(0.0, walls + o, True) for o in SKIM_OVER]
     starts += [(r, over - r, False) for r in DROPS
                if r + 2 * half[2] <= walls - DROP_BELOW_WALLS]  # fmt: skip
-    places = [(x, start) for start in starts for x in xs]
-    places += [(tight, start) for start in starts] if tight > xs[-1] + 1e-3 else []
+    places = [(x, 0.0, start) for start in starts for x in xs]
+    places += [(tight, 0.0, start) for start in starts] if tight > xs[-1] + 1e-3 else []
+    places += _leaning(starts, back, front_wall, along)
     return tuple(
-        _target(T, np.array([x, center[1], z + r]), yaw, 0.0, "top", lift, skim)
-        for x, (r, lift, skim) in places
+        _target(T, np.array([x, center[1], z + r]), yaw, -pitch, "top", lift, skim)
+        for x, pitch, (r, lift, skim) in places
     )
+
+
+def _leaning(
+    starts: list[tuple[float, float, bool]], back: float, front_wall: float, along: bool
+) -> list[tuple[float, float, tuple[float, float, bool]]]:
+    """The last places in a drawer: the object leaning by :data:`LEAN`, its top toward
+    the robot, as near the front wall as its tilted footprint allows (``x`` [m], object
+    frame), from each level start but the drops, raised so its lowest edge is
+    :data:`LEAN_LOWEST` over the floor. Returns ``(x, pitch [rad], (raise, lift,
+    skim))``; none where the drawer lies across (the fingers then open along the pull)
+    or the tilted object does not fit in the box. Its low far edge may stand under the
+    carcass: the place is lowered into only where the arm's collision check finds a
+    way."""
+    hx, _, hz = OBJECT_HALF_SIZE
+    reach = hx * np.cos(LEAN) + hz * np.sin(LEAN)  # the tilted box's half-depth
+    x = front_wall - CLEARANCE - reach
+    if not along or x - reach < back + CLEARANCE:
+        return []
+    r = hx * np.sin(LEAN) + hz * (np.cos(LEAN) - 1.0) + LEAN_LOWEST
+    return [(x, LEAN, (r, max(lift - r, 0.0), skim)) for r0, lift, skim in starts if r0 == 0.0]
 
 
 def rim(part: PartSpec) -> float:
