@@ -15,7 +15,8 @@ the first):
   of the box comes near them; where no base pose reaches that high, the same places
   follow lowered from ``SkillParams.place_clearance`` (the free motion then ends inside
   the box), then lowered from just over the walls (:data:`SKIM_OVER`, a drawer high
-  up), then, in a deep box, let go higher up and dropped (:data:`DROPS`).
+  up), then, in a deep box, let go higher up and dropped (:data:`DROPS`); last, held
+  leaning (:data:`LEAN`), the wrist out in front of the drawer above.
 - a **cell** (behind an open door, or an open shelf): carried in level from the front
   (``side`` grasp), resting on the cell's floor :data:`INSERT` behind the front; it
   comes in midway up the cell's free opening (up to :data:`MAX_LIFT` above its place),
@@ -99,9 +100,9 @@ DROP_BELOW_WALLS = 0.05
 TIGHT_GAP = 0.005
 #: Where nothing level is reachable, a drawer's object is held leaning by this [rad]
 #: about the drawer's width, its top toward the robot: the wrist, 0.19 m above the
-#: object's centre along the grasp, stands 6 cm farther out, in front of the drawer
-#: above and its knob, which a level hand over a drawer out 15.5 cm under another meets
-#: at every place (oracle OpenDrawer episodes 9983, 9988).
+#: object's centre along the grasp, stands 6.5 cm farther out, in front of the drawer
+#: above and its knob, which a level hand over a drawer out 15.5 cm under another met
+#: at all 15 level places (oracle OpenDrawer episodes 9823, 9988: both placed leaning).
 LEAN = 0.35
 #: The leaning object's lowest edge is let go this high over the box's floor [m]; it
 #: drops onto that edge and falls back flat, its centre behind the edge.
@@ -229,8 +230,9 @@ def place_targets(
     the box's walls (:data:`ABOVE_WALLS` over each), then, where that is out of reach,
     from ``place_clearance`` (lift 0), then from just over the walls
     (:data:`SKIM_OVER`); then, in a box deep enough, each is let go :data:`DROPS` above
-    the floor; last, the object as near the front wall as :data:`TIGHT_GAP`, from each
-    of these heights in turn. A cell has one.
+    the floor; then the object as near the front wall as :data:`TIGHT_GAP`, from each
+    of these heights in turn; last, the object leaning (:data:`LEAN`), its top toward
+    the robot, from each height but the drops (:func:`_leaning`). A cell has one.
 
     Raises:
         UnknownNameError: no part ``link``.
@@ -294,8 +296,8 @@ def _leaning(
     frame), from each level start but the drops, raised so its lowest edge is
     :data:`LEAN_LOWEST` over the floor. Returns ``(x, pitch [rad], (raise, lift,
     skim))``; none where the drawer lies across (the fingers then open along the pull)
-    or the tilted object does not fit in the box. Its low far edge may stand under the
-    carcass: the place is lowered into only where the arm's collision check finds a
+    or the tilted object does not fit in the box. Its far end may stand under the
+    carcass: such a place is reached only where the arm's collision check finds a
     way."""
     hx, _, hz = OBJECT_HALF_SIZE
     reach = hx * np.cos(LEAN) + hz * np.sin(LEAN)  # the tilted box's half-depth
