@@ -17,7 +17,7 @@ from planners.solvers import SOLVERS, make_solver
 from strug_manip.domains import MANIPULATION_DOMAINS, make_domain
 from strug_manip.domains.manipulation import episode_setup
 from strug_manip.domains.manipulation.actions import TABLE, ManipAction, part_kind
-from strug_manip.domains.manipulation.catalogue import representatives
+from strug_manip.domains.manipulation.catalogue import PLAN_MODELS, representatives
 from strug_manip.domains.manipulation.conditioning import (
     SAME_HINGE,
     Front,
@@ -29,7 +29,7 @@ from strug_manip.domains.manipulation.conditioning import (
 )
 from strug_manip.domains.manipulation.grounding import cabinet_frame, handle_point, position
 from strug_manip.domains.manipulation.health import status_of
-from strug_manip.domains.manipulation.real import MATCH_RADIUS, REAL_PLAN_MODELS
+from strug_manip.domains.manipulation.real import MATCH_RADIUS
 from strug_manip.domains.manipulation.rules import BEFORE_MOTION, REPEATS_ITSELF, UNCHANGED
 from strug_manip.domains.manipulation.state import (
     ManipObservation,
@@ -847,9 +847,24 @@ def test_a_real_opening_that_cannot_start_is_planned_in_the_next_holder(
         if kind == "drawer" and len(d.cat.holders(mass, k, h)) >= 3
     )
     rep = d.root.rep(a)
-    assert [i for i, _ in d.environment.plan_models(a, rng)] == held[:REAL_PLAN_MODELS]
-    assert held[0] == rep and REAL_PLAN_MODELS >= 2
+    assert [i for i, _ in d.environment.plan_models(a, rng)] == held[:PLAN_MODELS]
+    assert list(d.root.plan_models(a)) == held[:PLAN_MODELS]
+    assert held[0] == rep and PLAN_MODELS >= 2
     skills = d.skills
+
+    # A twin plans in the same models in the same order while its plan cannot start:
+    # one that stopped at the representative predicted a failure the real robot,
+    # going on to the next model, never shows (OpenDoor episode 10016).
+    asked = []
+
+    def no_plan_anywhere(i, act, sim, holder=None):
+        asked.append(holder)
+        return [], None
+
+    monkeypatch.setattr(d, "skills", no_plan_anywhere)
+    twin = next(s for s in belief.states if s.origin == rep)
+    d._simulate(twin.origin, twin.sim, a)
+    assert asked == held[:PLAN_MODELS]
 
     def no_plan_in_rep(i, act, sim, holder=None):
         return ([], None) if holder == rep else skills(i, act, sim, holder)

@@ -27,6 +27,15 @@ from strug_manip.domains.manipulation.actions import (
 from strug_manip.domains.manipulation.worlds import ParticleWorlds
 from strug_manip.world.sim import WorldState
 
+#: An opening or a probe is planned in at most this many models before the real robot
+#: spends the step: the hypothesis's representative, then its next likeliest holders.
+#: A plan that stops before anything moves (:data:`~.rules.BEFORE_MOTION`) costs a whole
+#: step and is no evidence, so the belief cannot steer away from it; another holder's
+#: model differs in where the handle, the hinge and the other parts are (a holder that
+#: believes a neighbouring door ajar finds the approach to the target blocked).
+#: Planning is cheap next to a step; three bounds what a step may spend on it.
+PLAN_MODELS = 3
+
 
 @dataclass(frozen=True)
 class Catalogue:
@@ -126,6 +135,25 @@ def representatives(
     return tuple(out)
 
 
+def followers(
+    cat: Catalogue, belief: ParticleBelief, reps: tuple[tuple[int, ...], ...]
+) -> tuple[tuple[tuple[int, ...], ...], ...]:
+    """Per catalogued part and hypothesis, the models an opening or a probe is planned
+    in after the representative ``reps[k][h]``, while a plan stops before anything
+    moves: the hypothesis's next likeliest holders with weight in ``belief``, at most
+    :data:`PLAN_MODELS` with the representative (:meth:`Root.plan_models`)."""
+    mass = cat.mass(belief)
+    return tuple(
+        tuple(
+            tuple(i for i in cat.holders(mass, k, h) if i != reps[k][h] and mass[i] > 0)[
+                : PLAN_MODELS - 1
+            ]
+            for h in range(len(part.hypotheses))
+        )
+        for k, part in enumerate(cat.parts)
+    )
+
+
 def best_states(belief: ParticleBelief) -> dict[int, WorldState]:
     """Per model, the simulation state of its likeliest particle in ``belief`` (ties:
     the first)."""
@@ -148,12 +176,30 @@ class Root:
         refused: the (action, particle it follows) pairs the real robot refuses at the
             root (:class:`.real.RealEpisode`).
         now: the step count of the root's states.
+        also: per catalogued part and hypothesis, the models an opening or a probe is
+            planned in after the representative's plan stops before anything moves
+            (:func:`followers`; empty: none).
     """
 
     reps: tuple[tuple[int, ...], ...] = ()
     best: Mapping[int, WorldState] = field(default_factory=dict)
     refused: frozenset[tuple[ManipAction, int]] = frozenset()
     now: int = 0
+    also: tuple[tuple[tuple[int, ...], ...], ...] = ()
+
+    def plan_models(self, a: ManipAction) -> tuple[int, ...]:
+        """The models opening or probe ``a`` is planned in, in turn, while a plan stops
+        before anything moves: the representative, then :attr:`also`. The real robot
+        tries them in this order, and so does every twin: a twin that stopped where the
+        real robot goes on to the next model predicts a failure the real robot never
+        shows (OpenDoor episode 10016: the representative's approach put the fingers
+        3 mm into the carcass, every twin said ``ik_infeasible``, the real robot opened
+        the door in the next model, and the true hypothesis lost its weight).
+        ``(-1,)`` for Pick and Place, which follow none."""
+        rep = self.rep(a)
+        if rep < 0 or not self.also:
+            return (rep,)
+        return (rep, *self.also[a.part][max(a.hypothesis, 0)])
 
     def rep(self, a: ManipAction) -> int:
         """The particle whose grasp and joint opening or probe ``a`` follows (-1: Pick

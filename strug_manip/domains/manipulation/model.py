@@ -65,6 +65,7 @@ from strug_manip.domains.manipulation.catalogue import (
     Root,
     best_states,
     build_catalogue,
+    followers,
 )
 from strug_manip.domains.manipulation.episode_setup import TASK_KINDS
 from strug_manip.domains.manipulation.grounding import (
@@ -75,7 +76,7 @@ from strug_manip.domains.manipulation.grounding import (
     skills,
 )
 from strug_manip.domains.manipulation.plans import plan_candidates, prior_scores, relevance
-from strug_manip.domains.manipulation.rules import BEFORE_MOTION_CODES, open_enough
+from strug_manip.domains.manipulation.rules import BEFORE_MOTION, BEFORE_MOTION_CODES, open_enough
 from strug_manip.domains.manipulation.state import (
     NOT_APPLICABLE,
     REAL,
@@ -219,7 +220,9 @@ class ManipulationPOMDP(GenerativePOMDP):
         self._space = self._make_space(action_list(parts, self.task, self.probes))
         self.timers.setup += time.perf_counter() - t0
         belief = ParticleBelief.from_states([ManipState(i, w.initial[i], 0) for i in range(len(w))])
-        self.root = Root(reps=tuple(part.holders for part in parts), best=best_states(belief))
+        reps = tuple(part.holders for part in parts)
+        also = followers(self.cat, belief, reps)
+        self.root = Root(reps=reps, best=best_states(belief), also=also)
         return belief
 
     def _perceive(self, rng: np.random.Generator, n_particles: int) -> list[belief_mod.Particle]:
@@ -266,7 +269,7 @@ class ManipulationPOMDP(GenerativePOMDP):
 
     def step(self, s: ManipState, a: Hashable, rng: np.random.Generator) -> Step:
         """``a`` on particle state ``s``'s twin (cached by particle, state, action and
-        the particle the action follows)."""
+        the models the action is planned in, :meth:`.catalogue.Root.plan_models`)."""
         a = self.check_action(a)
         if s.origin == REAL:
             raise ConfigError(
@@ -274,7 +277,7 @@ class ManipulationPOMDP(GenerativePOMDP):
                 "the environment's (strug_manip.domains.manipulation.real)"
             )
         w = self.need_worlds()
-        key = (s.origin, s.sim.key, a, self.root.rep(a))
+        key = (s.origin, s.sim.key, a, self.root.plan_models(a))
         hit = w.outcomes.lookup(key)
         if hit is None:
             t0 = time.perf_counter()
@@ -327,7 +330,7 @@ class ManipulationPOMDP(GenerativePOMDP):
         if s.t == self.root.now and (a, rep) in self.root.refused:
             return False
         w = self.need_worlds()
-        key = (s.origin, s.sim.key, a, rep)
+        key = (s.origin, s.sim.key, a, self.root.plan_models(a))
         hit = w.outcomes.get(key)  # a peek: the search's hit rate counts steps only
         if hit is not None:
             return hit[1][0] != STATUS_CODES[NOT_APPLICABLE]
@@ -461,9 +464,10 @@ class ManipulationPOMDP(GenerativePOMDP):
 
     def _simulate(self, i: int, sim: WorldState, a: ManipAction):
         """``a`` on particle ``i``'s twin from ``sim``: (next sim, observation key,
-        reward, terminal, summary)."""
+        reward, terminal, summary). An opening or a probe is planned in each of
+        :meth:`.catalogue.Root.plan_models` in turn while its plan stops before
+        anything moves, as the real robot plans it."""
         w = self.need_worlds()
-        candidates, plan_world = self.skills(i, a, sim)
         tw = w.twins[i]
         tw.restore(sim)
 
@@ -472,11 +476,16 @@ class ManipulationPOMDP(GenerativePOMDP):
 
         before = handle_point(tw.world, a, link)
 
-        def run(skill):
+        def run(skill, plan_world):
             tw.restore(sim)
             return skill.simulate(tw, plan_world=plan_world)
 
-        out = first_feasible(functools.partial(run, sk) for sk in candidates)
+        out = None
+        for holder in self.root.plan_models(a):
+            candidates, plan_world = self.skills(i, a, sim, None if holder < 0 else holder)
+            out = first_feasible(functools.partial(run, sk, plan_world) for sk in candidates)
+            if out is not None and out.status not in BEFORE_MOTION:
+                break
         if out is None:
             return sim, observation_key(NOT_APPLICABLE, holds_object(tw.world), np.zeros(3)), \
                 0.0, False, f"{a.skill}: {NOT_APPLICABLE}"  # fmt: skip

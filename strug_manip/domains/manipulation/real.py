@@ -40,7 +40,12 @@ from strug_manip.control import Outcome, Status
 from strug_manip.control.skills import holds_object
 from strug_manip.domains.manipulation import conditioning
 from strug_manip.domains.manipulation.actions import SAME_PART, TABLE, ManipAction, label
-from strug_manip.domains.manipulation.catalogue import Root, best_states, representatives
+from strug_manip.domains.manipulation.catalogue import (
+    Root,
+    best_states,
+    followers,
+    representatives,
+)
 from strug_manip.domains.manipulation.episode_setup import draw_episode, handles
 from strug_manip.domains.manipulation.grounding import (
     first_feasible,
@@ -77,14 +82,6 @@ from strug_manip.world.views import cabinet_cloud, look_poses, take_views
 #: found no path in the planner's budget a third rarely does (a held-out door episode
 #: spent seven steps on one ``Place`` that way).
 NO_PLAN_TRIES = 2
-#: The real robot plans an opening or a probe in at most this many models before it
-#: spends the step: the hypothesis's representative, then its next likeliest holders.
-#: A plan that stops before anything moves (:data:`~.rules.BEFORE_MOTION`) costs a whole
-#: step and is no evidence, so the belief cannot steer away from it; another holder's
-#: model differs in where the handle, the hinge and the other parts are (a holder that
-#: believes a neighbouring door ajar finds the approach to the target blocked).
-#: Planning is cheap next to a step; three bounds what a step may spend on it.
-REAL_PLAN_MODELS = 3
 #: A catalogued part and a true part are one part when each is the other's nearest and
 #: their handles are this close [m] (:meth:`RealEnvironment.counterpart`). Perception
 #: names a bar handle anywhere along the bar: in OpenDrawer episode 9870 the catalogued
@@ -259,7 +256,9 @@ class RealEnvironment:
         if real is None or w is None or all(s.t == 0 for s in belief.states):
             self.belief = belief
             refused = frozenset(real.refused) if real is not None else frozenset()
-            model.root = Root(model.root.reps, best_states(belief), refused, 0)
+            reps = model.root.reps
+            also = followers(model.cat, belief, reps) if w is not None else ()
+            model.root = Root(reps, best_states(belief), refused, 0, also)
             if real is not None and w is not None:
                 self.health = self._health(belief)
             return belief
@@ -272,7 +271,8 @@ class RealEnvironment:
         if self.health is not None:
             self.health.updated(self.belief)
         reps = representatives(model.cat, self.belief, model.root.reps)
-        model.root = Root(reps, best_states(self.belief), frozenset(real.refused), real.now)
+        also = followers(model.cat, self.belief, reps)
+        model.root = Root(reps, best_states(self.belief), frozenset(real.refused), real.now, also)
         return self.belief
 
     # --- the real step -----------------------------------------------------------------
@@ -344,21 +344,15 @@ class RealEnvironment:
     def plan_models(self, a: ManipAction, rng: np.random.Generator) -> list[tuple[int, WorldState]]:
         """The models the real robot plans ``a`` against, in the order it tries them
         while a plan stops before anything moves, each with its state: for an opening
-        or a probe, the hypothesis's representative (:meth:`.catalogue.Root.rep`) and
-        then its next likeliest holders with weight, at most :data:`REAL_PLAN_MODELS`,
-        each in its likeliest current state; for Pick and Place, one model
+        or a probe, :meth:`.catalogue.Root.plan_models` (the hypothesis's
+        representative, then its next likeliest holders with weight, as the twins try
+        them), each in its likeliest current state; for Pick and Place, one model
         (:meth:`likeliest`)."""
         model = self.model
-        w, cat = model.need_worlds(), model.cat
+        w = model.need_worlds()
         if a.skill in ("Pick", "Place"):
             return [self.likeliest(a, rng)]
-        rep = model.root.rep(a)
-        b = self.belief
-        mass = cat.mass(b) if b is not None else np.zeros(len(cat.classes))
-        others = [i for i in cat.holders(mass, a.part, max(a.hypothesis, 0))
-                  if i != rep and mass[i] > 0]  # fmt: skip
-        chosen = [rep, *others][:REAL_PLAN_MODELS]
-        return [(i, model.root.best.get(i) or w.initial[i]) for i in chosen]
+        return [(i, model.root.best.get(i) or w.initial[i]) for i in model.root.plan_models(a)]
 
     def likeliest(self, a: ManipAction, rng: np.random.Generator) -> tuple[int, WorldState]:
         """The model the real robot plans Pick or Place against, and its state: the
