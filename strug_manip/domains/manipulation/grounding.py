@@ -5,6 +5,7 @@ reward of an outcome (:func:`reward`); shared by the twins' POMDP and the real r
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import replace
 
@@ -23,9 +24,11 @@ from strug_manip.control import (
     handle_grasps,
     place_targets,
 )
+from strug_manip.control.skills import holds_object
 from strug_manip.domains.manipulation.actions import TABLE, ManipAction, part_point
 from strug_manip.domains.manipulation.catalogue import Catalogue, Root
-from strug_manip.domains.manipulation.rules import UNCHANGED, dragged, inside
+from strug_manip.domains.manipulation.rules import BEFORE_MOTION, UNCHANGED, dragged, inside
+from strug_manip.domains.manipulation.state import NOT_APPLICABLE, observation_key
 from strug_manip.domains.manipulation.worlds import ParticleWorlds
 from strug_manip.geometry import rotation_angle
 from strug_manip.objects.generator import CabinetSpec, PartSpec
@@ -198,3 +201,59 @@ def first_feasible(runs: Iterable[Callable[[], Outcome]]) -> Outcome | None:
         if out is not None and not out.cannot_reach:
             break
     return out
+
+
+def in_turn(
+    models: Sequence[int], plan_in: Callable[[int], Outcome | None]
+) -> tuple[Outcome | None, int]:
+    """``plan_in(m)`` for each of ``models`` in turn while it stops before anything
+    moves (:data:`~.rules.BEFORE_MOTION`) or cannot be planned (None): the last outcome
+    and how many models were tried. The real robot and every twin plan an opening or a
+    probe this way, in :meth:`.catalogue.Root.plan_models`."""
+    out, tried = None, 0
+    for m in models:
+        tried += 1
+        out = plan_in(m)
+        if out is not None and out.status not in BEFORE_MOTION:
+            break
+    return out, tried
+
+
+def twin_run(
+    w: ParticleWorlds,
+    cat: Catalogue,
+    root: Root,
+    home: np.ndarray,
+    i: int,
+    a: ManipAction,
+    sim: WorldState,
+) -> tuple[WorldState, tuple, float, bool, str]:
+    """``a`` on particle ``i``'s twin from ``sim``, planned as the real robot plans it
+    (:func:`skills`, :func:`in_turn`): (next sim, observation key, reward, terminal,
+    summary). ``home``: where ``Place(table)`` puts the object back, (4, 4)."""
+    tw = w.twins[i]
+    tw.restore(sim)
+
+    def link() -> str | None:
+        return cat.parts[a.part].links[i]
+
+    before = handle_point(tw.world, a, link)
+
+    def run(skill, plan_world: ManipulationWorld | None) -> Outcome:
+        tw.restore(sim)
+        return skill.simulate(tw, plan_world=plan_world)
+
+    def plan_in(holder: int) -> Outcome | None:
+        candidates, plan_world = skills(
+            w, cat, root, home, i, a, sim, None if holder < 0 else holder
+        )
+        return first_feasible(functools.partial(run, sk, plan_world) for sk in candidates)
+
+    out, _ = in_turn(root.plan_models(a), plan_in)
+    if out is None:
+        key = observation_key(NOT_APPLICABLE, holds_object(tw.world), np.zeros(3))
+        return sim, key, 0.0, False, f"{a.skill}: {NOT_APPLICABLE}"
+    motion = handle_point(tw.world, a, link) - before
+    r = reward(w.particles[i].spec, cat.targets[i], tw.world, out)
+    key = observation_key(out.status, out.holding, motion)
+    return tw.snapshot(), key, r, r != 0.0, out.summary()

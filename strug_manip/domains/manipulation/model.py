@@ -33,7 +33,6 @@ likelihood.
 
 from __future__ import annotations
 
-import functools
 import math
 import time
 from collections.abc import Hashable, Sequence
@@ -69,21 +68,18 @@ from strug_manip.domains.manipulation.catalogue import (
 )
 from strug_manip.domains.manipulation.episode_setup import TASK_KINDS
 from strug_manip.domains.manipulation.grounding import (
-    first_feasible,
-    handle_point,
     position,
-    reward,
     skills,
+    twin_run,
 )
 from strug_manip.domains.manipulation.plans import plan_candidates, prior_scores, relevance
-from strug_manip.domains.manipulation.rules import BEFORE_MOTION, BEFORE_MOTION_CODES, open_enough
+from strug_manip.domains.manipulation.rules import BEFORE_MOTION_CODES, open_enough
 from strug_manip.domains.manipulation.state import (
     NOT_APPLICABLE,
     REAL,
     STATUS_CODES,
     ManipObservation,
     ManipState,
-    observation_key,
 )
 from strug_manip.domains.manipulation.twin_keys import (
     TwinConfusion,
@@ -463,36 +459,10 @@ class ManipulationPOMDP(GenerativePOMDP):
         return skills(self.need_worlds(), self.cat, self.root, home, i, a, sim, holder)
 
     def _simulate(self, i: int, sim: WorldState, a: ManipAction):
-        """``a`` on particle ``i``'s twin from ``sim``: (next sim, observation key,
-        reward, terminal, summary). An opening or a probe is planned in each of
-        :meth:`.catalogue.Root.plan_models` in turn while its plan stops before
-        anything moves, as the real robot plans it."""
-        w = self.need_worlds()
-        tw = w.twins[i]
-        tw.restore(sim)
-
-        def link() -> str | None:
-            return self.parts[a.part].links[i]
-
-        before = handle_point(tw.world, a, link)
-
-        def run(skill, plan_world):
-            tw.restore(sim)
-            return skill.simulate(tw, plan_world=plan_world)
-
-        out = None
-        for holder in self.root.plan_models(a):
-            candidates, plan_world = self.skills(i, a, sim, None if holder < 0 else holder)
-            out = first_feasible(functools.partial(run, sk, plan_world) for sk in candidates)
-            if out is not None and out.status not in BEFORE_MOTION:
-                break
-        if out is None:
-            return sim, observation_key(NOT_APPLICABLE, holds_object(tw.world), np.zeros(3)), \
-                0.0, False, f"{a.skill}: {NOT_APPLICABLE}"  # fmt: skip
-        motion = handle_point(tw.world, a, link) - before
-        r = reward(w.particles[i].spec, self.cat.targets[i], tw.world, out)
-        return (tw.snapshot(), observation_key(out.status, out.holding, motion), r,
-                r != 0.0, out.summary())  # fmt: skip
+        """:func:`.grounding.twin_run` in this episode: (next sim, observation key,
+        reward, terminal, summary)."""
+        home = self._need_view().home
+        return twin_run(self.need_worlds(), self.cat, self.root, home, i, a, sim)
 
     def _holding(self, s: ManipState) -> bool:
         tw = self.need_worlds().twins[s.origin]

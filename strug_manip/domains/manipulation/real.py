@@ -50,6 +50,7 @@ from strug_manip.domains.manipulation.episode_setup import draw_episode, handles
 from strug_manip.domains.manipulation.grounding import (
     first_feasible,
     handle_point,
+    in_turn,
     position,
     reward,
 )
@@ -284,22 +285,23 @@ class RealEnvironment:
         link = functools.partial(self.real_link, a.part)
         before = handle_point(world, a, link)
         seed = int(rng.integers(2**31))
-        out, tried, planned = None, 0, -1
-        for i, state in self.plan_models(a, rng):
-            tried, planned = tried + 1, i
+        models = dict(self.plan_models(a, rng))
+
+        def plan_in(i: int) -> Outcome | None:
             world.restore(s.sim)  # a stop before motion may still have stepped it
-            candidates, plan_world = model.skills(i, a, state, holder=i)
+            candidates, plan_world = model.skills(i, a, models[i], holder=i)
             if plan_world is None or a.skill == "Pick":
                 # The model's state, not the search's shared one for Pick: the route
                 # from the cabinet to the table must keep clear of the doors that
                 # stand open (the arm swept an open door shut on the way).
-                plan_world = model.need_worlds().fetch(i, state)
-            out = first_feasible(
+                plan_world = model.need_worlds().fetch(i, models[i])
+            return first_feasible(
                 functools.partial(sk.run, world, ctx=model.ctx, plan_world=plan_world, seed=seed)
                 for sk in candidates
             )
-            if out is not None and out.status not in BEFORE_MOTION:
-                break
+
+        out, tried = in_turn(list(models), plan_in)
+        planned = list(models)[tried - 1] if tried else -1
         if out is None:
             status, holding, motion, r, summary = NOT_APPLICABLE, holds_object(world), \
                 np.zeros(3), 0.0, \
@@ -309,7 +311,7 @@ class RealEnvironment:
             real.labels.append(label(a))
             status, holding, summary = out.status, out.holding, out.summary()
             if tried > 1:  # the belief weighs it as the representative's action
-                summary += f" [planned in model {i}, after {tried - 1} that could not start]"
+                summary += f" [planned in model {planned}, after {tried - 1} that could not start]"
             motion = handle_point(world, a, link) - before
             r = reward(world.scene.cabinet_spec, real.target, world, out)
         # Such a failure repeats itself until something changes: the plan is made
