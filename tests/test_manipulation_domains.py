@@ -15,7 +15,7 @@ from planners.errors import ConfigError, UnknownNameError
 from planners.pomdp import Step
 from planners.solvers import SOLVERS, make_solver
 from strug_manip.domains import MANIPULATION_DOMAINS, make_domain
-from strug_manip.domains.manipulation import episode_setup, grounding
+from strug_manip.domains.manipulation import episode_setup
 from strug_manip.domains.manipulation.actions import TABLE, ManipAction, part_kind
 from strug_manip.domains.manipulation.catalogue import PLAN_MODELS, representatives
 from strug_manip.domains.manipulation.conditioning import (
@@ -857,12 +857,12 @@ def test_a_real_opening_that_cannot_start_is_planned_in_the_next_holder(
     # going on to the next model, never shows (OpenDoor episode 10016).
     asked = []
 
-    def no_plan_anywhere(w, cat, root, home, i, act, sim, holder=None):
+    def no_plan_anywhere(i, act, sim, holder=None):
         asked.append(holder)
         return [], None
 
     with monkeypatch.context() as m:
-        m.setattr(grounding, "skills", no_plan_anywhere)
+        m.setattr(d, "skills", no_plan_anywhere)
         twin = next(s for s in belief.states if s.origin == rep)
         d._simulate(twin.origin, twin.sim, a)  # the twin run itself, not the cache
     assert asked == held[:PLAN_MODELS]

@@ -222,15 +222,16 @@ def in_turn(
 def twin_run(
     w: ParticleWorlds,
     cat: Catalogue,
-    root: Root,
-    home: np.ndarray,
     i: int,
     a: ManipAction,
     sim: WorldState,
+    models: Sequence[int],
+    plan_for: Callable[[int | None], tuple[list, ManipulationWorld | None]],
 ) -> tuple[WorldState, tuple, float, bool, str]:
-    """``a`` on particle ``i``'s twin from ``sim``, planned as the real robot plans it
-    (:func:`skills`, :func:`in_turn`): (next sim, observation key, reward, terminal,
-    summary). ``home``: where ``Place(table)`` puts the object back, (4, 4)."""
+    """``a`` on particle ``i``'s twin from ``sim``, planned as the real robot plans it:
+    in each of ``models`` in turn (:meth:`.catalogue.Root.plan_models`, :func:`in_turn`;
+    -1: none to follow) with ``plan_for(model)``'s skills and planning world
+    (:func:`skills`). Returns (next sim, observation key, reward, terminal, summary)."""
     tw = w.twins[i]
     tw.restore(sim)
 
@@ -244,12 +245,10 @@ def twin_run(
         return skill.simulate(tw, plan_world=plan_world)
 
     def plan_in(holder: int) -> Outcome | None:
-        candidates, plan_world = skills(
-            w, cat, root, home, i, a, sim, None if holder < 0 else holder
-        )
+        candidates, plan_world = plan_for(None if holder < 0 else holder)
         return first_feasible(functools.partial(run, sk, plan_world) for sk in candidates)
 
-    out, _ = in_turn(root.plan_models(a), plan_in)
+    out, _ = in_turn(models, plan_in)
     if out is None:
         key = observation_key(NOT_APPLICABLE, holds_object(tw.world), np.zeros(3))
         return sim, key, 0.0, False, f"{a.skill}: {NOT_APPLICABLE}"

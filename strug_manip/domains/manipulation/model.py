@@ -33,6 +33,7 @@ likelihood.
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from collections.abc import Hashable, Sequence
@@ -459,10 +460,10 @@ class ManipulationPOMDP(GenerativePOMDP):
         return skills(self.need_worlds(), self.cat, self.root, home, i, a, sim, holder)
 
     def _simulate(self, i: int, sim: WorldState, a: ManipAction):
-        """:func:`.grounding.twin_run` in this episode: (next sim, observation key,
-        reward, terminal, summary)."""
-        home = self._need_view().home
-        return twin_run(self.need_worlds(), self.cat, self.root, home, i, a, sim)
+        """:func:`.grounding.twin_run` in this episode, planned with :meth:`skills`:
+        (next sim, observation key, reward, terminal, summary)."""
+        plan_for = functools.partial(self.skills, i, a, sim)
+        return twin_run(self.need_worlds(), self.cat, i, a, sim, self.root.plan_models(a), plan_for)
 
     def _holding(self, s: ManipState) -> bool:
         tw = self.need_worlds().twins[s.origin]
