@@ -141,7 +141,10 @@ def followers(
     """Per catalogued part and hypothesis, the models an opening or a probe is planned
     in after the representative ``reps[k][h]``, while a plan stops before anything
     moves: the hypothesis's next likeliest holders with weight in ``belief``, at most
-    :data:`PLAN_MODELS` with the representative (:meth:`Root.plan_models`)."""
+    :data:`PLAN_MODELS` with the representative (:meth:`Root.plan_models`); none
+    before the episode's catalogue is built."""
+    if not cat.classes:
+        return ()
     mass = cat.mass(belief)
     return tuple(
         tuple(
@@ -186,6 +189,19 @@ class Root:
     refused: frozenset[tuple[ManipAction, int]] = frozenset()
     now: int = 0
     also: tuple[tuple[tuple[int, ...], ...], ...] = ()
+
+    @classmethod
+    def of(
+        cls,
+        cat: Catalogue,
+        belief: ParticleBelief,
+        reps: tuple[tuple[int, ...], ...],
+        refused: frozenset[tuple[ManipAction, int]] = frozenset(),
+        now: int = 0,
+    ) -> Root:
+        """The root of a search from ``belief``: the representatives ``reps``, each
+        model's likeliest state and the followers derived from ``belief``."""
+        return cls(reps, best_states(belief), refused, now, followers(cat, belief, reps))
 
     def plan_models(self, a: ManipAction) -> tuple[int, ...]:
         """The models opening or probe ``a`` is planned in, in turn, while a plan stops

@@ -63,9 +63,7 @@ from strug_manip.domains.manipulation.actions import (
 from strug_manip.domains.manipulation.catalogue import (
     Catalogue,
     Root,
-    best_states,
     build_catalogue,
-    followers,
 )
 from strug_manip.domains.manipulation.episode_setup import TASK_KINDS
 from strug_manip.domains.manipulation.grounding import (
@@ -217,9 +215,7 @@ class ManipulationPOMDP(GenerativePOMDP):
         self._space = self._make_space(action_list(parts, self.task, self.probes))
         self.timers.setup += time.perf_counter() - t0
         belief = ParticleBelief.from_states([ManipState(i, w.initial[i], 0) for i in range(len(w))])
-        reps = tuple(part.holders for part in parts)
-        also = followers(self.cat, belief, reps)
-        self.root = Root(reps=reps, best=best_states(belief), also=also)
+        self.root = Root.of(self.cat, belief, tuple(part.holders for part in parts))
         return belief
 
     def _perceive(self, rng: np.random.Generator, n_particles: int) -> list[belief_mod.Particle]:

@@ -42,8 +42,6 @@ from strug_manip.domains.manipulation import conditioning
 from strug_manip.domains.manipulation.actions import SAME_PART, TABLE, ManipAction, label
 from strug_manip.domains.manipulation.catalogue import (
     Root,
-    best_states,
-    followers,
     representatives,
 )
 from strug_manip.domains.manipulation.episode_setup import draw_episode, handles
@@ -257,9 +255,7 @@ class RealEnvironment:
         if real is None or w is None or all(s.t == 0 for s in belief.states):
             self.belief = belief
             refused = frozenset(real.refused) if real is not None else frozenset()
-            reps = model.root.reps
-            also = followers(model.cat, belief, reps) if w is not None else ()
-            model.root = Root(reps, best_states(belief), refused, 0, also)
+            model.root = Root.of(model.cat, belief, model.root.reps, refused, 0)
             if real is not None and w is not None:
                 self.health = self._health(belief)
             return belief
@@ -272,8 +268,7 @@ class RealEnvironment:
         if self.health is not None:
             self.health.updated(self.belief)
         reps = representatives(model.cat, self.belief, model.root.reps)
-        also = followers(model.cat, self.belief, reps)
-        model.root = Root(reps, best_states(self.belief), frozenset(real.refused), real.now, also)
+        model.root = Root.of(model.cat, self.belief, reps, frozenset(real.refused), real.now)
         return self.belief
 
     # --- the real step -----------------------------------------------------------------
@@ -286,6 +281,7 @@ class RealEnvironment:
         before = handle_point(world, a, link)
         seed = int(rng.integers(2**31))
         models = dict(self.plan_models(a, rng))
+        order = list(models)
 
         def plan_in(i: int) -> Outcome | None:
             world.restore(s.sim)  # a stop before motion may still have stepped it
@@ -300,8 +296,8 @@ class RealEnvironment:
                 for sk in candidates
             )
 
-        out, tried = in_turn(list(models), plan_in)
-        planned = list(models)[tried - 1] if tried else -1
+        out, tried = in_turn(order, plan_in)
+        planned = order[tried - 1] if tried else -1
         if out is None:
             status, holding, motion, r, summary = NOT_APPLICABLE, holds_object(world), \
                 np.zeros(3), 0.0, \
