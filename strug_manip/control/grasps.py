@@ -2,12 +2,12 @@
 
 A handle grasp puts the TCP on the handle's grasp point with the gripper's approach
 (its x axis) into the part's front and its fingers straddling the handle: the finger
-opening (gripper y) perpendicular to a bar. A knob can be taken either way: on a door
-the fingers first straddle it as they would a bar along the hinge (the bar a door
-has: vertical on a side door, horizontal on a flap), so that a bar perception took for
-a knob is held too (OpenDoor episode 9800: "the fingers closed on nothing"; on the 30
-knob doors of doors-only cabinets 3000:3030 the order changes nothing, 29 open either
-way); on a drawer they open horizontally; the other way is the next candidate. Of
+opening (gripper y) perpendicular to a bar. A knob can be taken either way, so the
+fingers first straddle it as they would the bar such a part has: on a door a bar along
+the hinge (vertical on a side door, horizontal on a flap), on a drawer a horizontal
+bar. A bar perception took for a knob is then held too (OpenDoor episode 9800 and
+OpenDrawer 10047, 10049, 10067: "the fingers closed on nothing", each time on a
+bar); the other way is the next candidate. Of
 the two finger directions the one pointing up (or, if level, to +y) is used; the
 skills' base placement also tries the fingers swapped (the same grasp, the wrist
 turned half a turn).
@@ -109,13 +109,13 @@ def handle_grasps(
     side /= np.linalg.norm(side)
     bars: list[np.ndarray | None] = [bar]
     if part.handle == "knob":
-        # As if straddling a bar along the hinge (a door: the bar a door has), or
-        # vertical (a drawer: the fingers open horizontally); then the other.
+        # As if straddling the bar such a part has (a door: along the hinge; a
+        # drawer: horizontal, the fingers open vertically); then the other way.
         if part.joint_type == "revolute":
             edge = T[:3, :3] @ R_part @ np.cross(part.axis, [1.0, 0.0, 0.0])
             bars = [np.cross(normal, edge), edge]
         else:
-            bars = [None, side]
+            bars = [side, None]
     depth = float(part.handle_pos[0] - front_of_handle(part))  # TCP in front of the face
     out = []
     slack = max_back_off(part)
