@@ -116,6 +116,27 @@ def test_knob_grasps_offer_both_finger_directions(cabinets) -> None:
     assert any(abs(g[2, 1]) == pytest.approx(1.0) for g in gs[1:])
 
 
+def test_a_drawers_knob_is_first_held_as_the_horizontal_bar_a_drawer_has() -> None:
+    """A drawer's knob is first straddled with the fingers opening vertically, as a
+    drawer's bar (always horizontal) is: a bar perception took for a knob is then held
+    too (OpenDrawer 10047, 10049, 10067 closed the fingers on such a bar, opening
+    horizontally along it). Then the other way, horizontally."""
+    cab = generate_cabinet(11, kinds=("drawer",), handles=("knob",))
+    part = cab.movable_parts[0]
+    assert part.handle == "knob" and part.joint_type == "prismatic"
+    gs = handle_grasps(part)
+    check_grasps(part, gs)
+    # The finger opening (gripper y) across a horizontal bar has no y component,
+    # pitched or not; opening horizontally it is along y.
+    across = [abs(g[1, 1]) < 1e-9 for g in gs]
+    along = [abs(g[1, 1]) == pytest.approx(1.0) for g in gs]
+    n = across.index(False)
+    assert n > 0 and all(along[n:]) and all(across[:n])
+    bar = generate_cabinet(11, kinds=("drawer",), handles=("bar",)).movable_parts[0]
+    assert abs(bar.handle_axis[1]) > 0.99  # the bar the knob's first grasps are as
+    assert all(abs(g[1, 1]) < 1e-9 for g in handle_grasps(bar))
+
+
 def test_every_handle_the_generator_makes_can_be_grasped() -> None:
     # Short knobs (0.02 m) once had no grasp: the pads reached the front before the
     # TCP reached the grasp point, and backing off left the grasp point outside them.
