@@ -56,6 +56,7 @@ from planners.errors import ConfigError, UnknownNameError
 from strug_manip.control.context import ControlContext
 from strug_manip.control.executor import Body
 from strug_manip.control.fetch_body import FullRobot, Observer
+from strug_manip.control.grasps import held_grasp
 from strug_manip.control.outcome import Outcome
 from strug_manip.control.params import DEFAULT_PARAMS, SkillParams
 from strug_manip.control.plan import (
@@ -83,6 +84,14 @@ HANDLE_RADIUS = 0.05
 HELD_RADIUS = 0.1
 #: Grasps of :class:`Pick`.
 GRASPS: tuple[str, ...] = ("top", "side")
+#: How far the object's centre stands below the TCP as :class:`Pick` takes it [m], per
+#: grasp (:func:`object_grasp`: from above, the TCP 1 cm over the centre; from the side,
+#: at it).
+HELD_BELOW: dict[str, float] = {"top": 0.01, "side": 0.0}
+#: An object held higher in the fingers than :class:`Pick` took it, by more than this
+#: [m], is let go that much above its target (:meth:`Place.plan`); below it, the
+#: fingers' give.
+RISE_TOLERANCE = 0.003
 
 
 class Skill:
@@ -498,6 +507,20 @@ def holds_object(world: ManipulationWorld) -> bool:
     return bool(np.linalg.norm(tcp - world.object_pose()[:3, 3]) <= HELD_RADIUS)
 
 
+def held_rise(T_world_gripper: np.ndarray, T_world_object: np.ndarray) -> float:
+    """How much higher the held object stands in the hand than :class:`Pick` took it
+    [m], if more than :data:`RISE_TOLERANCE`, else 0.
+
+    An object that rose in the fingers (it caught on the table as they closed:
+    OpenDoor 10053, 2.5 cm) would take the hand below its own bottom when set down, the
+    palm into the shelf or the table at every base (``ik_infeasible``, the table's
+    place too). A place then stops the hand where the hold Pick made would put it, and
+    the object drops the rest."""
+    T_go = np.linalg.inv(T_world_gripper) @ T_world_object
+    rise = float(T_world_object[2, 3] - T_world_gripper[2, 3]) + HELD_BELOW[held_grasp(T_go)]
+    return rise if rise > RISE_TOLERANCE else 0.0
+
+
 @dataclass(frozen=True)
 class Pick(Skill):
     """Pick the object ``o`` where it lies and lift it; the robot then carries it.
@@ -571,7 +594,7 @@ class Place(Skill):
         T_wg, T_wo = world.site_pose(GRIPPER_SITE), world.object_pose()
         T_go = np.linalg.inv(T_wg) @ T_wo
         g = p @ np.linalg.inv(T_go)
-        g[2, 3] += params.place_drop
+        g[2, 3] += params.place_drop + held_rise(T_wg, T_wo)
         top = g[2, 0] < -0.7  # the approach points down
         d = np.array([0.0, 0.0, -1.0]) if top else g[:3, 0].copy()
         if not top:
