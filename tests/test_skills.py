@@ -1006,3 +1006,55 @@ def test_an_opening_ends_in_a_slow_ease_line(worlds) -> None:
     assert abs(move.length + ease.length - one.length) < 1e-9
     probe = PullH(g).plan(world, p)
     assert "ease" not in [ln.name for ln in probe.lines]
+
+
+class _Held:
+    """What :meth:`Place.plan` reads of a world: the TCP's and the object's poses."""
+
+    def __init__(self, T_wg: np.ndarray, T_wo: np.ndarray) -> None:
+        self.T_wg, self.T_wo = T_wg, T_wo
+
+    def site_pose(self, name: str) -> np.ndarray:
+        return self.T_wg
+
+    def object_pose(self) -> np.ndarray:
+        return self.T_wo
+
+
+def test_an_object_that_rose_in_the_fingers_is_let_go_as_high_above_its_target():
+    """Held from the side 2.5 cm higher than Pick took it (OpenDoor 10053: every place,
+    the table's too, put the palm into the surface), the hand stops where Pick's hold
+    would put it and the object drops the 2.5 cm; a rise within the tolerance, or an
+    object that slid down, changes nothing; from above, the TCP 1 cm over the centre is
+    the hold Pick makes."""
+    from strug_manip.control.skills import RISE_TOLERANCE, held_rise
+
+    side = np.eye(4)
+    side[:3, :3] = np.column_stack([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
+    side[:3, 3] = (0.6, 0.0, 1.0)
+    top = np.eye(4)
+    top[:3, :3] = np.column_stack([[0.0, 0.0, -1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]])
+    top[:3, 3] = (0.6, 0.0, 1.0)
+
+    def obj(T_wg: np.ndarray, dz: float) -> np.ndarray:
+        T = np.eye(4)
+        T[:3, 3] = T_wg[:3, 3] + (0.0, 0.0, dz)
+        return T
+
+    assert held_rise(side, obj(side, 0.0)) == 0.0
+    assert held_rise(side, obj(side, 0.025)) == pytest.approx(0.025)
+    assert held_rise(side, obj(side, RISE_TOLERANCE - 1e-4)) == 0.0
+    assert held_rise(side, obj(side, -0.02)) == 0.0
+    assert held_rise(top, obj(top, -0.01)) == 0.0
+    assert held_rise(top, obj(top, 0.01)) == pytest.approx(0.02)
+
+    target = np.eye(4)
+    target[:3, 3] = (1.0, 0.2, 0.7)
+    centred = Place("object", target, lift=0.02).plan(_Held(side, obj(side, 0.0)))
+    risen = Place("object", target, lift=0.02).plan(_Held(side, obj(side, 0.025)))
+    # The hand goes where it goes with Pick's hold (the object 2.5 cm higher there),
+    # not 2.5 cm lower.
+    assert risen.pre[:3, 3] == pytest.approx(centred.pre[:3, 3])
+    assert centred.phases[-3].name == risen.phases[-3].name == "lower"
+    let_go = [p.poses[-1][:3, 3] for p in (centred.phases[-3], risen.phases[-3])]
+    assert let_go[1] == pytest.approx(let_go[0])
