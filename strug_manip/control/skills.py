@@ -47,7 +47,9 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
+from types import MappingProxyType
 from typing import ClassVar, Literal
 
 import numpy as np
@@ -87,7 +89,7 @@ GRASPS: tuple[str, ...] = ("top", "side")
 #: How far the object's centre stands below the TCP as :class:`Pick` takes it [m], per
 #: grasp (:func:`object_grasp`: from above, the TCP 1 cm over the centre; from the side,
 #: at it).
-HELD_BELOW: dict[str, float] = {"top": 0.01, "side": 0.0}
+HELD_BELOW: Mapping[str, float] = MappingProxyType({"top": 0.01, "side": 0.0})
 #: An object held higher in the fingers than :class:`Pick` took it, by more than this
 #: [m], is let go that much above its target (:meth:`Place.plan`); below it, the
 #: fingers' give.
@@ -511,11 +513,11 @@ def held_rise(T_world_gripper: np.ndarray, T_world_object: np.ndarray) -> float:
     """How much higher the held object stands in the hand than :class:`Pick` took it
     [m], if more than :data:`RISE_TOLERANCE`, else 0.
 
-    An object that rose in the fingers (it caught on the table as they closed:
-    OpenDoor 10053, 2.5 cm) would take the hand below its own bottom when set down, the
-    palm into the shelf or the table at every base (``ik_infeasible``, the table's
-    place too). A place then stops the hand where the hold Pick made would put it, and
-    the object drops the rest."""
+    An object that rose in the fingers (the oracle's OpenDoor 10053: 2.5 cm after a
+    side grasp) would take the hand below its own bottom when set down, the palm into
+    the shelf or the table at every base (``ik_infeasible``, the table's place too). A
+    place then stops the hand where the hold Pick made would put it, and the object
+    drops the rest."""
     T_go = np.linalg.inv(T_world_gripper) @ T_world_object
     rise = float(T_world_object[2, 3] - T_world_gripper[2, 3]) + HELD_BELOW[held_grasp(T_go)]
     return rise if rise > RISE_TOLERANCE else 0.0
@@ -572,6 +574,9 @@ class Place(Skill):
         skim: an object held from above is lowered from exactly ``lift`` (> 0), even
             below ``place_clearance``: a drawer too high up for the hand to start
             higher, its walls skimmed (:data:`~strug_manip.control.targets.SKIM_OVER`).
+
+    The object is let go ``SkillParams.place_drop`` above ``p``, and higher by as much
+    as it rose in the fingers since :class:`Pick` took it (:func:`held_rise`).
     """
 
     o: str
