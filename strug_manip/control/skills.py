@@ -47,9 +47,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping
 from dataclasses import dataclass
-from types import MappingProxyType
 from typing import ClassVar, Literal
 
 import numpy as np
@@ -86,13 +84,9 @@ HANDLE_RADIUS = 0.05
 HELD_RADIUS = 0.1
 #: Grasps of :class:`Pick`.
 GRASPS: tuple[str, ...] = ("top", "side")
-#: How far the object's centre stands below the TCP as :class:`Pick` takes it [m], per
-#: grasp (:func:`object_grasp`: from above, the TCP 1 cm over the centre; from the side,
-#: at it).
-HELD_BELOW: Mapping[str, float] = MappingProxyType({"top": 0.01, "side": 0.0})
-#: An object held higher in the fingers than :class:`Pick` took it, by more than this
-#: [m], is let go that much above its target (:meth:`Place.plan`); below it, the
-#: fingers' give.
+#: An object held from the side higher in the fingers than :class:`Pick` took it (the
+#: TCP at its centre), by more than this [m], is let go that much above its target
+#: (:func:`held_rise`); below it, the fingers' give.
 RISE_TOLERANCE = 0.003
 
 
@@ -510,16 +504,22 @@ def holds_object(world: ManipulationWorld) -> bool:
 
 
 def held_rise(T_world_gripper: np.ndarray, T_world_object: np.ndarray) -> float:
-    """How much higher the held object stands in the hand than :class:`Pick` took it
-    [m], if more than :data:`RISE_TOLERANCE`, else 0.
+    """How much higher an object held from the side stands in the hand than
+    :class:`Pick` took it (its centre at the TCP) [m], if more than
+    :data:`RISE_TOLERANCE`, else 0; 0 for an object held from above.
 
     An object that rose in the fingers (the oracle's OpenDoor 10053: 2.5 cm after a
     side grasp) would take the hand below its own bottom when set down, the palm into
     the shelf or the table at every base (``ik_infeasible``, the table's place too). A
     place then stops the hand where the hold Pick made would put it, and the object
-    drops the rest."""
+    drops the rest. Held from above, the fingertips hang 3.4 cm above the object's
+    bottom as Pick takes it, and the full robot's hold routinely rises 4-7 mm (its
+    twin's does not): letting those go higher changed episodes that had nothing to
+    gain (OpenDrawer 10087), so they keep their place."""
     T_go = np.linalg.inv(T_world_gripper) @ T_world_object
-    rise = float(T_world_object[2, 3] - T_world_gripper[2, 3]) + HELD_BELOW[held_grasp(T_go)]
+    if held_grasp(T_go) == "top":
+        return 0.0
+    rise = float(T_world_object[2, 3] - T_world_gripper[2, 3])
     return rise if rise > RISE_TOLERANCE else 0.0
 
 
@@ -575,8 +575,9 @@ class Place(Skill):
             below ``place_clearance``: a drawer too high up for the hand to start
             higher, its walls skimmed (:data:`~strug_manip.control.targets.SKIM_OVER`).
 
-    The object is let go ``SkillParams.place_drop`` above ``p``, and higher by as much
-    as it rose in the fingers since :class:`Pick` took it (:func:`held_rise`).
+    The object is let go ``SkillParams.place_drop`` above ``p``, and, held from the
+    side, higher by as much as it rose in the fingers since :class:`Pick` took it
+    (:func:`held_rise`).
     """
 
     o: str
