@@ -254,3 +254,59 @@ def test_the_likelihood_ranks_the_true_model_first_after_a_probe(seed: int) -> N
         assert ranking[:2] == ["true", r["right"]], r
         ll = log_likelihood(np.zeros((1, 3)), [np.full((1, 3), h) for h in r["H"].values()])
         assert np.argmax(ll) == list(r["H"]).index("true")
+
+
+def test_a_door_whose_handle_no_view_showed_mostly_gets_one_in_the_cabinets_style() -> None:
+    """A door hypothesis without a seen handle gets, in about ``unseen_handle`` of the
+    particles that read it as a door, a handle at the generator's spot in the style the
+    cabinet's other parts show; in a cabinet that shows no handle, none gets one."""
+    import dataclasses
+
+    from strug_manip.domains.manipulation.belief import seen_style
+
+    fused = _oracle_fusion(render_episode(3000, 4))
+    style = seen_style(fused)
+    assert style is not None
+    # The hypothesis most likely a door among those whose handle the views show.
+    k = max(
+        (i for i, h in enumerate(fused.parts) if h.handle is not None),
+        key=lambda i: fused.parts[i].class_prob[2],
+    )
+    hidden = dataclasses.replace(fused.parts[k], handle=None)
+    one_hidden = dataclasses.replace(
+        fused, parts=tuple(hidden if i == k else h for i, h in enumerate(fused.parts))
+    )
+    cfg = BeliefConfig(particles=300)
+
+    def doors_from_k(f) -> list:
+        particles = sample_particles([f], np.random.default_rng(3), cfg)
+        return [
+            part
+            for p in particles
+            for i, part in enumerate(p.spec.parts)
+            if p.source[i] == k and part.kind == "door"
+        ]
+
+    doors = doors_from_k(one_hidden)
+    assert len(doors) >= 30
+    handled = [d for d in doors if d.handle != "none"]
+    share = len(handled) / len(doors)
+    lo, hi = scipy.stats.binom.interval(0.999, len(doors), cfg.unseen_handle)
+    assert lo / len(doors) <= share <= hi / len(doors), share
+    assert all(d.handle == style for d in handled)
+    # At the generator's spot: 4.5 cm in from the free edge (a flap's: its lower or
+    # upper edge; a side door's: its left or right edge).
+    for d in handled:
+        y0, y1 = d.cell_center[1] - d.cell_size[0] / 2, d.cell_center[1] + d.cell_size[0] / 2
+        z0, z1 = d.cell_center[2] - d.cell_size[1] / 2, d.cell_center[2] + d.cell_size[1] / 2
+        edges = [abs(d.handle_pos[1] - y0), abs(d.handle_pos[1] - y1)]
+        if d.hinge not in ("left", "right"):
+            edges = [abs(d.handle_pos[2] - z0), abs(d.handle_pos[2] - z1)]
+        assert 0.03 < min(edges) < 0.07, (d.hinge, edges)
+    none_seen = dataclasses.replace(
+        fused, parts=tuple(dataclasses.replace(h, handle=None) for h in fused.parts)
+    )
+    assert seen_style(none_seen) is None
+    assert all(d.handle == "none" for d in doors_from_k(none_seen))
+    with pytest.raises(ConfigError, match="unseen_handle"):
+        BeliefConfig(unseen_handle=1.5)

@@ -33,7 +33,8 @@ per part; defaults in :class:`BeliefConfig`):
 
 A part's handle is the style its seen shape says (a bar or a knob,
 :func:`perception.fusion.handle_shape`; a bar along the direction seen) at the seen grasp
-point. Limits, damping and friction cannot be seen: they are drawn from the generator's
+point; a door whose handle no view showed mostly gets one where the generator puts it,
+in the style the cabinet's other handles show (``unseen_handle``). Limits, damping and friction cannot be seen: they are drawn from the generator's
 documented ranges (:mod:`strug_manip.objects.generator`), limits never below the
 opening seen; a flap (a door hinged top or bottom) gets the generator's friction stay
 (:attr:`~strug_manip.objects.assembly.PartModel.stay`), so that it stays where it is
@@ -96,6 +97,15 @@ class BeliefConfig:
         origin_noise: 0.008 [m]; rect_noise: 0.006 [m]; q_noise: 0.01 [m or rad].
         split_base: 0.1; split_merged: 0.5.
         min_cell: 0.12 [m] (the generator's smallest cell height).
+        unseen_handle: 0.8: the probability that a door whose handle no view showed has
+            one at the generator's spot (:class:`~strug_manip.objects.assembly.PartModel`'s
+            default: 4.5 cm in from the free edge, centred along it), in the style the
+            cabinet's other parts show (the generator gives a cabinet one handle style
+            for all its parts; without a handle seen anywhere, none is added). The
+            target of OpenDoor episodes 10083 and 10088 was a door whose handle no view
+            showed: every model had it handle-less, the catalogue had no part there, and
+            no action could open it. The other 0.2 keeps a misread panel, or a cabinet
+            whose pulls the look moves, without one.
         depth_beyond_seen: (-0.05, 0.10) [m]: where the views see the carcass's depth
             (:attr:`~perception.fusion.FrontFrame.depth`: how far behind the front its
             points reach), each particle's carcass goes a uniform draw from this range
@@ -125,6 +135,7 @@ class BeliefConfig:
     split_merged: float = 0.5
     min_cell: float = 0.12
     depth_beyond_seen: tuple[float, float] = (-0.05, 0.10)
+    unseen_handle: float = 0.8
 
     def __post_init__(self) -> None:
         check_positive_int("particles", self.particles)
@@ -159,6 +170,11 @@ class BeliefConfig:
             raise ConfigError(
                 "BeliefConfig.depth_beyond_seen must be finite (lo, hi) with lo <= hi [m], "
                 f"got {self.depth_beyond_seen}"
+            )
+        if not (isinstance(self.unseen_handle, int | float) and 0 <= self.unseen_handle <= 1):
+            raise ConfigError(
+                f"BeliefConfig.unseen_handle must be a probability in [0, 1], "
+                f"got {self.unseen_handle!r}"
             )
         if self.class_floor > 1 / 3 or self.hinge_floor > 1 / 4:
             raise ConfigError("class_floor must be <= 1/3 and hinge_floor <= 1/4")
@@ -219,10 +235,24 @@ def _closed_handle(
     return origin + axis_angle(axis, -q) @ (h.handle - origin)
 
 
+def seen_style(f: FusedCabinet) -> str | None:
+    """The handle style the fusion's parts show most (ties: the largest part's), or
+    None when no part shows a handle."""
+    styles = [h.handle_style for h in f.parts if h.handle is not None]
+    return max(styles, key=styles.count) if styles else None
+
+
 def _draw_part(
-    h: PartHypothesis, depth: float, cfg: BeliefConfig, rng: np.random.Generator
+    h: PartHypothesis,
+    depth: float,
+    cfg: BeliefConfig,
+    rng: np.random.Generator,
+    style: str | None = None,
 ) -> list[PartModel]:
-    """The part(s) one hypothesis contributes to one particle (none if it does not exist)."""
+    """The part(s) one hypothesis contributes to one particle (none if it does not
+    exist); ``style``: the handle style of the cabinet's seen handles
+    (:func:`seen_style`), given to a door whose own handle no view showed with
+    probability ``cfg.unseen_handle``."""
     lo, hi = cfg.existence_range
     if rng.random() >= float(np.clip(h.existence, lo, hi)):
         return []
@@ -287,6 +317,8 @@ def _draw_part(
     handle = _closed_handle(h, "door", axis, origin, q)
     if handle is not None and side in ("left", "right") and not (y0 <= handle[1] <= y1):
         handle = None  # the seen handle does not fit this interpretation's panel
+    # A handle no view showed, where the generator puts one (handle_pos None).
+    unseen = h.handle is None and style is not None and rng.random() < cfg.unseen_handle
     damping, friction = (
         float(rng.uniform(*gen.DOOR_DAMPING)),
         float(rng.uniform(*gen.DOOR_FRICTION)),
@@ -302,12 +334,12 @@ def _draw_part(
             side,
             upper,
             q,
-            h.handle_style if handle is not None else "none",
+            style if unseen else h.handle_style if handle is not None else "none",
             handle,
             damping,
             friction,
             stay,
-            handle_along=h.handle_along,
+            handle_along=None if unseen else h.handle_along,
         )
     ]
 
@@ -376,8 +408,9 @@ def sample_particles(
         depth = max(0.25, depth)
         parts: list[PartModel] = []
         source: list[int] = []
+        style = seen_style(f)
         for i, h in enumerate(f.parts):  # largest first: a smaller one overlapping it is dropped
-            for m in _draw_part(h, depth, cfg, rng):
+            for m in _draw_part(h, depth, cfg, rng, style):
                 if not any(_overlaps(m.rect, o.rect) for o in parts):
                     parts.append(m)
                     source.append(i)
