@@ -32,11 +32,12 @@ per part; defaults in :class:`BeliefConfig`):
   ``split_base`` plus ``split_merged`` times the share of views that saw it merged.
 
 A part's handle is the style its seen shape says (a bar or a knob,
-:func:`perception.fusion.handle_shape`; a bar along the direction seen) at the seen grasp
-point; a door whose handle no view showed mostly gets one where the generator puts it,
-in the style the cabinet's other handles show (``unseen_handle``). Limits, damping and friction cannot be seen: they are drawn from the generator's
-documented ranges (:mod:`strug_manip.objects.generator`), limits never below the
-opening seen; a flap (a door hinged top or bottom) gets the generator's friction stay
+:func:`perception.fusion.handle_shape`; a bar along the direction seen) at the seen
+grasp point; a door whose handle no view showed mostly gets one where the generator puts
+it, in the style the cabinet's other handles show (``unseen_handle``). Limits, damping
+and friction cannot be seen: they are drawn from the generator's documented ranges
+(:mod:`strug_manip.objects.generator`), limits never below the opening seen; a flap (a
+door hinged top or bottom) gets the generator's friction stay
 (:attr:`~strug_manip.objects.assembly.PartModel.stay`), so that it stays where it is
 unless pushed. Particles depend only on perception's outputs and the generator's
 documented ranges, never on a true cabinet.
