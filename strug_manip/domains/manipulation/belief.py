@@ -397,6 +397,7 @@ def sample_particles(
     cfg = config or BeliefConfig()
     if not fused:
         raise ConfigError("sample_particles needs at least one FusedCabinet")
+    styles = [seen_style(f) for f in fused]  # per run, not per particle
     out = []
     for _ in range(cfg.particles):
         run = int(rng.integers(len(fused)))
@@ -409,9 +410,8 @@ def sample_particles(
         depth = max(0.25, depth)
         parts: list[PartModel] = []
         source: list[int] = []
-        style = seen_style(f)
         for i, h in enumerate(f.parts):  # largest first: a smaller one overlapping it is dropped
-            for m in _draw_part(h, depth, cfg, rng, style):
+            for m in _draw_part(h, depth, cfg, rng, styles[run]):
                 if not any(_overlaps(m.rect, o.rect) for o in parts):
                     parts.append(m)
                     source.append(i)
