@@ -11,11 +11,12 @@ import numpy as np
 import pytest
 
 from planners.belief import ParticleBelief
-from planners.errors import ModelError
+from planners.errors import ConfigError, ModelError
 from planners.pomdp import legal_in, prior_order, provides_prior
 from planners.solvers import STRUGConfig, make_solver
 from planners.solvers.action_tree import ActionTree, history_ranks
 from planners.solvers.base import UniformStream
+from planners.solvers.exploration import most_visited_index, puct_select
 from strug_manip.domains import TOY_DOMAINS, make_domain
 from strug_manip.domains.manipulation.actions import TABLE, ManipAction
 from strug_manip.domains.tiger import LISTEN, OPEN_LEFT, OPEN_RIGHT, Tiger
@@ -138,3 +139,29 @@ def test_on_a_12_drawer_cabinet_the_target_pick_and_place_come_first() -> None:
         assert opening in visited and info.actions[0] == opening
     finally:
         d.close()
+
+
+def test_strug_puts_its_root_visits_where_its_particles_plans_begin() -> None:
+    """With an action prior, STRUG's root is PUCT over the weight of the plans' first
+    actions (``root_selection="auto"``): on a certain Tiger belief (tiger left), every
+    plan opens the right door, which then gets most of the visits and is the decision;
+    the same search by UCB tries all three actions first."""
+    sure = ParticleBelief.from_states([0] * 20)
+    rng = np.random.default_rng(0)
+    _, info = STRUGConfig(sims=9).planner(DoorsFirstTiger()).act(sure, rng)
+    visits = dict(zip(info.actions, info.visits.tolist(), strict=True))
+    assert max(visits, key=visits.__getitem__) == OPEN_RIGHT and visits[OPEN_RIGHT] >= 7
+    ucb = STRUGConfig(sims=9, root_selection="ucb").planner(DoorsFirstTiger())
+    _, info = ucb.act(sure, np.random.default_rng(0))
+    assert all(info.visits > 0)
+    with pytest.raises(ConfigError, match="root_selection must be one of auto, ucb, puct"):
+        STRUGConfig(root_selection="pucb")
+
+
+def test_puct_scores_and_decides_by_visits() -> None:
+    q, n = [5.0, 0.0, 2.0], [4, 0, 1]
+    # Visited: Q + c P sqrt(N) / (1 + n); unvisited: c P sqrt(N).
+    assert puct_select([0, 1, 2], q, n, 5, 1.0, [0.8, 0.1, 0.1]) == 0
+    assert puct_select([0, 1, 2], q, n, 5, 100.0, [0.1, 0.8, 0.1]) == 1
+    assert most_visited_index(np.array([1.0, 3.0, 2.0]), np.array([4, 4, 1])) == 1
+    assert most_visited_index(np.array([1.0]), np.array([0])) is None

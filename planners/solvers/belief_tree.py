@@ -55,6 +55,7 @@ from planners.solvers.action_tree import (
     resolve_widening,
 )
 from planners.solvers.base import Budget, SearchInfo, TreeSearchConfig, UniformStream
+from planners.solvers.exploration import best_index, most_visited_index, puct_select
 from planners.solvers.rollout import check_rollout, make_rollout, plan_return, resolve_rollout
 
 #: Leaf estimators of a new belief node.
@@ -62,6 +63,16 @@ ROLLOUTS = ("random", "plan", "heuristic", "auto")
 
 #: Where terminal actions are solved (see ``BeliefTreeConfig.solve_terminal``).
 SOLVE_TERMINAL = ("auto", "always", "never")
+
+#: How the root chooses its next action (see ``BeliefTreeConfig.root_selection``).
+ROOT_SELECTION = ("auto", "ucb", "puct")
+
+#: Share of the root's PUCT prior spread evenly over its actions, the rest on the first
+#: actions of the particles' plans by weight: an action no plan begins with (a probe, a
+#: part no particle plans for) still gets a visit once the plans' first actions return
+#: little (at c = 10, an unvisited action of 13 outscores a plan action worth 0 after
+#: about 16 of its visits).
+PRIOR_SPREAD = 0.5
 
 #: A belief-dependent node value: ``value(states, weights)`` with weights shape ``(M,)``.
 NodeValue = Callable[[list[Any], np.ndarray], float]
@@ -112,6 +123,12 @@ class BeliefTreeConfig(TreeSearchConfig):
         exploration: ``"fixed"`` (default) or ``"normalized"`` UCB (see
             :class:`TreeSearchConfig`); ``c_normalized`` its constant (default 1.0).
         horizon: ``"receding"`` (default) or ``"episode"`` (see :class:`TreeSearchConfig`).
+        root_selection: how the root picks the action to simulate: ``"ucb"`` (the
+            paper's) or ``"puct"`` (``Q + c P sqrt(N) / (1 + n)``, P the weight of the
+            particles whose plan begins with the action, :data:`PRIOR_SPREAD` of it
+            spread evenly; the decision is the most visited action); ``"auto"``
+            (default): ``"puct"`` where the domain has an action prior and the solver
+            has its particles' plans (STRUG on the manipulation tasks), else ``"ucb"``.
     """
 
     particles: int = 32
@@ -123,10 +140,16 @@ class BeliefTreeConfig(TreeSearchConfig):
     widening: str = "auto"
     rollout: str = "random"
     solve_terminal: str = "auto"
+    root_selection: str = "auto"
 
     def __post_init__(self) -> None:
         super().__post_init__()
         check_positive_int("particles", self.particles)
+        if self.root_selection not in ROOT_SELECTION:
+            raise ConfigError(
+                f"root_selection must be one of {', '.join(ROOT_SELECTION)}, "
+                f"got {self.root_selection!r}"
+            )
         if self.solve_terminal not in SOLVE_TERMINAL:
             raise ConfigError(
                 f"solve_terminal must be one of {', '.join(SOLVE_TERMINAL)}, "
@@ -182,7 +205,7 @@ class TreeResult:
         q: value per root action, shape ``(A,)``.
         visits: visits per root action, shape ``(A,)``.
         bonus: mean bonus earned by the root action's observation children, ``(A,)``.
-        best: the visited root action with the highest value (None if none visited).
+        best: the root's decision (:meth:`BeliefTreeSearch.decision`; None if none visited).
         root_value: the belief-dependent value of the root (TRU or entropy), or NaN.
         sims: simulations run.
         belief_nodes: belief nodes created.
@@ -289,6 +312,9 @@ class BeliefTreeSearch:
         self.filter = provides_applicable(pomdp)
         self.prior = provides_prior(pomdp)
         self.root_plans = root_plans
+        guided = self.prior and root_plans is not None and widening == "all"
+        self.puct = config.root_selection == "puct" or (config.root_selection == "auto" and guided)
+        self.root_prior: list[float] | None = None
         self.node_value, self.beta, self.reward_weight = node_value, beta, reward_weight
         self.terminal_bonus = terminal_bonus
         self.with_bonus = node_value is not None and beta > 0.0
@@ -405,11 +431,34 @@ class BeliefTreeSearch:
 
         return rank
 
+    def select_root(self, n: int, keep: Keep | None, rank: Rank | None) -> int:
+        """The root's action node to simulate by PUCT (:func:`puct_select`), its prior
+        made with its children: the weight of the root particles whose plan
+        (``root_plans``) begins with each action, :data:`PRIOR_SPREAD` spread evenly."""
+        tree = self.tree
+        kids = tree.b_children[0] or tree.expand_all(0, keep, rank)
+        if self.root_prior is None:
+            first: dict[Hashable, float] = {}
+            for i, wi in enumerate(self.weights[0].tolist()):
+                plan = self.root_plans[i] if self.root_plans is not None else ()
+                if plan and wi > 0.0:
+                    first[plan[0]] = first.get(plan[0], 0.0) + wi
+            mass = [first.get(tree.a_action[j], 0.0) for j in kids]
+            total = sum(mass)
+            spread = PRIOR_SPREAD if total > 0.0 else 1.0
+            even = spread / len(kids)
+            self.root_prior = [(1.0 - spread) * m / (total or 1.0) + even for m in mass]
+        return puct_select(kids, tree.a_q, tree.a_n, n, tree.c, self.root_prior)
+
     def simulate(self, h: int, d: int) -> float:
         """One descent from belief node ``h`` at depth ``d``; returns its return."""
         tree, nh = self.tree, self.visits[h]
         keep = self.offered(h) if self.filter else None
-        anode, snode = tree.select(h, nh, keep, self.ranked(h) if self.prior else None)
+        rank = self.ranked(h) if self.prior else None
+        if h == 0 and self.puct:
+            anode, snode = self.select_root(nh, keep, rank), -1
+        else:
+            anode, snode = tree.select(h, nh, keep, rank)
         generated = tree.a_children[anode]
         cfg = self.config
         if len(generated) <= cfg.k_obs * tree.a_n[anode] ** cfg.alpha_obs:
@@ -426,6 +475,13 @@ class BeliefTreeSearch:
         self.visits[h] = nh + 1
         tree.update(anode, snode, total)
         return total
+
+    def decision(self) -> Hashable | None:
+        """The root's action: after a PUCT search the most visited, else the visited
+        one of the highest value (None if nothing was visited)."""
+        actions, q, visits = self.tree.root_stats()
+        i = most_visited_index(q, visits) if self.puct else best_index(q, visits)
+        return None if i is None else actions[i]
 
     def run(self, root_states: Sequence[Any], root_weights: np.ndarray) -> TreeResult:
         """Search from the belief ``(root_states, root_weights)`` (weights ``(M,)``)."""
@@ -451,7 +507,7 @@ class BeliefTreeSearch:
             q=q,
             visits=visits,
             bonus=bonus,
-            best=tree.best_root_action(),
+            best=self.decision(),
             root_value=self.value[0] if self.with_bonus else math.nan,
             sims=sims,
             belief_nodes=len(self.visits),

@@ -96,6 +96,37 @@ def ucb_select(
     return best
 
 
+def puct_select(
+    children: Sequence[int],
+    q: Sequence[float],
+    n: Sequence[int],
+    n_parent: int,
+    c: float,
+    prior: Sequence[float],
+) -> int:
+    """The child to simulate next by PUCT (Silver et al. 2017): ``Q_j + c * P_j *
+    sqrt(N) / (1 + n_j)``, an unvisited child's ``Q_j`` taken as 0. ``prior``: ``P_j``
+    per position in ``children`` (summing to 1). Ties: the first. The prior decides
+    where a few simulations go; a child's own returns take over as its visits grow."""
+    root_n = math.sqrt(n_parent)
+    best, best_v = children[0], -math.inf
+    for j, p in zip(children, prior, strict=True):
+        nj = n[j]
+        v = (q[j] if nj else 0.0) + c * p * root_n / (1 + nj)
+        if v > best_v:
+            best_v, best = v, j
+    return best
+
+
+def most_visited_index(q: np.ndarray, visits: np.ndarray) -> int | None:
+    """The root's decision after a PUCT search: the most visited child (ties: the
+    higher value, then the first), or None when no child was visited. Shapes ``(A,)``."""
+    if len(visits) == 0 or not np.any(visits > 0):
+        return None
+    top = visits == visits.max()
+    return int(np.argmax(np.where(top, q, -np.inf)))
+
+
 def best_index(q: np.ndarray, visits: np.ndarray) -> int | None:
     """The root's decision: the index of the visited child with the highest value
     (ties: the first), or None when no child was visited. Shapes ``(A,)``."""
