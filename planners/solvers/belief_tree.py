@@ -70,8 +70,8 @@ ROOT_SELECTION = ("auto", "ucb", "puct")
 #: Share of the root's PUCT prior spread evenly over its actions, the rest on the first
 #: actions of the particles' plans by weight: an action no plan begins with (a probe, a
 #: part no particle plans for) still gets a visit once the plans' first actions return
-#: little (at c = 10, an unvisited action of 13 outscores a plan action worth 0 after
-#: about 16 of its visits).
+#: little (of 13 actions, an unvisited one outscores the plans' one, worth 0, after its
+#: 14th visit, whatever c).
 PRIOR_SPREAD = 0.5
 
 #: A belief-dependent node value: ``value(states, weights)`` with weights shape ``(M,)``.

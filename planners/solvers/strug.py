@@ -5,9 +5,10 @@ matrix (Algorithm 1, :mod:`planners.tru`), then run the belief-tree search of
 :mod:`planners.solvers.belief_tree` with the reward ``R + beta * (TRU(b) - TRU(b'))``,
 TRU computed from the cached matrix and each node's weights over the M particles
 (the paper's approximate incremental TRU). Hybrid action spaces use HPW (Algorithm 3).
-On a domain with an action prior, the root tries its untried actions in the order of the
-weight of the particles whose plan begins with them, then the domain's prior
-(``root_plans`` of :class:`~planners.solvers.belief_tree.BeliefTreeSearch`).
+On a domain with an action prior, the root's actions are ordered by the weight of the
+particles whose plan begins with them, then by the domain's prior (``root_plans`` of
+:class:`~planners.solvers.belief_tree.BeliefTreeSearch`), and the root chooses among them
+by PUCT over that weight (``root_selection``).
 """
 
 from __future__ import annotations

@@ -48,7 +48,10 @@ MANIPULATION_DOMAINS: dict[str, Callable[..., GenerativePOMDP]] = {
 }
 #: Simulations per decision on the manipulation tasks when none are asked for (CLI and
 #: bench): each costs a twin's skill (tens of ms) where a toy domain's costs microseconds.
-MANIPULATION_SIMS = 20
+#: 100 (issue 37): STRUG's root puts them where its particles' plans begin (PUCT), so
+#: most revisit cached twin outcomes, and a decision takes about 2 s (20 simulations
+#: over every root action took 3-4 s and decided by the luckiest single return).
+MANIPULATION_SIMS = 100
 #: Root particles M of STRUG's compatibility matrix and of Entropy Regularized's and
 #: Active Learning's estimates on the manipulation tasks when none are asked for: each
 #: particle's plan pays its own Place placement search (about 0.2-0.4 s cold), and the
