@@ -156,6 +156,10 @@ def test_strug_puts_its_root_visits_where_its_particles_plans_begin() -> None:
     assert all(info.visits > 0)
     with pytest.raises(ConfigError, match="root_selection must be one of auto, ucb, puct"):
         STRUGConfig(root_selection="pucb")
+    lightdark = make_domain("lightdark2d")  # continuous actions: HPW, no list to rank
+    planner = STRUGConfig(sims=2, root_selection="puct").planner(lightdark)
+    with pytest.raises(ConfigError, match="needs a finite action list"):
+        planner.act(lightdark.initial_belief(rng, 10), rng)
 
 
 def test_puct_scores_and_decides_by_visits() -> None:

@@ -312,6 +312,11 @@ class BeliefTreeSearch:
         self.filter = provides_applicable(pomdp)
         self.prior = provides_prior(pomdp)
         self.root_plans = root_plans
+        if config.root_selection == "puct" and widening != "all":
+            raise ConfigError(
+                "root_selection='puct' needs a finite action list (widening 'all'), "
+                f"got widening {widening!r}"
+            )
         guided = self.prior and root_plans is not None and widening == "all"
         self.puct = config.root_selection == "puct" or (config.root_selection == "auto" and guided)
         self.root_prior: list[float] | None = None
@@ -420,16 +425,23 @@ class BeliefTreeSearch:
         def rank(actions: list[Hashable]) -> list[Hashable]:
             live = [i for i, wi in enumerate(w.tolist()) if wi > 0.0 and alive[i]]
             ls, lw = [states[i] for i in live], [float(w[i]) for i in live]
-            first: dict[Hashable, float] = {}
-            if h == 0 and self.root_plans is not None:
-                for i in live:
-                    plan = self.root_plans[i]
-                    if plan:
-                        first[plan[0]] = first.get(plan[0], 0.0) + float(w[i])
+            first = self.plans_first() if h == 0 else {}
             planned = (lambda a: first.get(a, 0.0)) if first else None
             return prior_order(pomdp, ls, lw, actions, planned)
 
         return rank
+
+    def plans_first(self) -> dict[Hashable, float]:
+        """Per action, the weight of the root's live particles whose plan
+        (``root_plans``) begins with it (empty without plans)."""
+        first: dict[Hashable, float] = {}
+        if self.root_plans is None:
+            return first
+        for i, wi in enumerate(self.weights[0].tolist()):
+            plan = self.root_plans[i]
+            if plan and wi > 0.0 and self.alive[0][i]:
+                first[plan[0]] = first.get(plan[0], 0.0) + wi
+        return first
 
     def select_root(self, n: int, keep: Keep | None, rank: Rank | None) -> int:
         """The root's action node to simulate by PUCT (:func:`puct_select`), its prior
@@ -438,11 +450,7 @@ class BeliefTreeSearch:
         tree = self.tree
         kids = tree.b_children[0] or tree.expand_all(0, keep, rank)
         if self.root_prior is None:
-            first: dict[Hashable, float] = {}
-            for i, wi in enumerate(self.weights[0].tolist()):
-                plan = self.root_plans[i] if self.root_plans is not None else ()
-                if plan and wi > 0.0:
-                    first[plan[0]] = first.get(plan[0], 0.0) + wi
+            first = self.plans_first()
             mass = [first.get(tree.a_action[j], 0.0) for j in kids]
             total = sum(mass)
             spread = PRIOR_SPREAD if total > 0.0 else 1.0
