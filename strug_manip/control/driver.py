@@ -178,36 +178,56 @@ class JointDriver:
         """Torso + arm straight (joint space) to ``q_goal`` (8,) in at least ``seconds``."""
         return self.follow([np.asarray(q_goal, dtype=float)], seconds, monitor=monitor)
 
-    def drive(self, route: Sequence[np.ndarray], torso: float | None = None) -> None:
+    def drive(
+        self,
+        route: Sequence[np.ndarray],
+        torso: float | None = None,
+        monitor: Monitor | None = None,
+    ) -> None:
         """Drive the base through the poses of ``route`` (each (3,): x, y, yaw) and wait
         until it stands within 5 mm and 5 mrad of the last (at most 3 s more); the torso
-        moves to
-        ``torso`` [m] on the way if given."""
+        moves to ``torso`` [m] on the way if given. ``monitor`` is called every
+        :data:`MONITOR_PERIOD` with the time driven [s] (a stop it raises ends the drive
+        where the base is; the servos stop feeding the route's velocity forward)."""
         goal_arm = self.arm_cmd.copy()
         if torso is not None:
             goal_arm[0] = torso
-        for k, target in enumerate(route):
-            start = self.base_target.copy()
-            pts = np.array([start, np.asarray(target, dtype=float)])
-            T = max(0.5, timing.duration(pts, self.base_speed, 0.0))
-            arm_pts = np.array([self.arm_cmd, goal_arm])
-            if k == 0:  # the torso rises on the way, within its (slow) speed limit
-                T = timing.duration(arm_pts, self.vmax, T)
-            dt = self.m.opt.timestep
-            base = timing.samples(pts, T, dt)
-            bvel = np.diff(np.vstack([pts[:1], base]), axis=0) / dt
-            arm = timing.samples(arm_pts, T, dt) if k == 0 else None
-            for i in range(len(base)):
-                self.base_target, self.base_vel = base[i], bvel[i]
-                if arm is not None:
-                    self.arm_cmd = arm[i]
-                self._step()
+        dt = self.m.opt.timestep
+        every = max(1, round(MONITOR_PERIOD / dt))
+        n = 0  # steps driven
+
+        def step() -> None:
+            nonlocal n
+            self._step()
+            n += 1
+            if monitor is not None and n % every == 0:
+                monitor(n * dt)
+
+        try:
+            for k, target in enumerate(route):
+                start = self.base_target.copy()
+                pts = np.array([start, np.asarray(target, dtype=float)])
+                T = max(0.5, timing.duration(pts, self.base_speed, 0.0))
+                arm_pts = np.array([self.arm_cmd, goal_arm])
+                if k == 0:  # the torso rises on the way, within its (slow) speed limit
+                    T = timing.duration(arm_pts, self.vmax, T)
+                base = timing.samples(pts, T, dt)
+                bvel = np.diff(np.vstack([pts[:1], base]), axis=0) / dt
+                arm = timing.samples(arm_pts, T, dt) if k == 0 else None
+                for i in range(len(base)):
+                    self.base_target, self.base_vel = base[i], bvel[i]
+                    if arm is not None:
+                        self.arm_cmd = arm[i]
+                    step()
+                self.base_vel = np.zeros(3)
+            for _ in range(30):
+                err = np.abs(self.base_target - self.base)
+                if err[0] < 0.005 and err[1] < 0.005 and err[2] < 0.005:
+                    return
+                for _ in range(max(1, round(0.1 / dt))):
+                    step()
+        finally:
             self.base_vel = np.zeros(3)
-        for _ in range(30):
-            err = np.abs(self.base_target - self.base)
-            if err[0] < 0.005 and err[1] < 0.005 and err[2] < 0.005:
-                return
-            self.hold(0.1)
 
     def grip(self, closed: bool, seconds: float, squeeze: float) -> None:
         """Close (command ``squeeze``) or open the fingers and step ``seconds`` [s]."""

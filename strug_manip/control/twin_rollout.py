@@ -355,7 +355,7 @@ class TwinRollout:
         :meth:`judge`) at which the cabinet has slid more than ``cabinet_motion_limit``
         or tipped more than ``cabinet_tilt_limit`` since ``start`` (all of them if it
         never does). The full robot's recovery is
-        monitored so (:meth:`~strug_manip.control.fetch_body.FullRobot._recover`): its
+        monitored so (:meth:`~strug_manip.control.recovery.Recovery._recover`): its
         arm stops where it is. Unmonitored, a hand caught on a handle as it backs off
         would drag the twin's cabinet on for the whole back-off, a drag no full robot
         makes."""
