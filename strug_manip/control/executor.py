@@ -307,14 +307,16 @@ def clear_first(
     run: Callable[[int, ArmMotionPlanner, int], MotionPlan],
     clear: Callable[[bool], contextlib.AbstractContextManager[None]],
     params: SkillParams,
+    wide: Callable[[], contextlib.AbstractContextManager[None]] | None = None,
 ) -> MotionPlan:
     """The first plan found by ``run(i, planner, checks)`` (the ``i``-th of
     ``planners``, its budget ``checks`` validity checks): each planner in turn inside
-    ``clear(True)`` (e.g. :func:`keeping_clear`, keeping the room the ends leave), then
-    inside ``clear(False)`` (what is near the ends may touch), each round's budget
-    capped at ``clear_checks``, then each in turn again with the plain check and its
-    full budget; a planner's turn ends the round when it succeeds or fails for another
-    reason than its budget."""
+    ``wide()`` if given (a wider berth, :func:`keeping_clear` with ``wide_clearance``),
+    then inside ``clear(True)`` (e.g. :func:`keeping_clear`, keeping the room the ends
+    leave), then inside ``clear(False)`` (what is near the ends may touch), each
+    round's budget capped at ``clear_checks``, then each in turn again with the plain
+    check and its full budget; a planner's turn ends the round when it succeeds or
+    fails for another reason than its budget."""
     res = None
     rounds: tuple[tuple[Callable[[], contextlib.AbstractContextManager[None]], int | None], ...]
     rounds = (
@@ -322,6 +324,8 @@ def clear_first(
         (functools.partial(clear, False), params.clear_checks),
         (contextlib.nullcontext, None),
     )
+    if wide is not None:
+        rounds = ((wide, params.clear_checks), *rounds)
     for keep, cap in rounds:
         with keep():
             for i, planner in enumerate(planners):
@@ -372,9 +376,11 @@ def keeping_clear(
     params: SkillParams,
     held: float = 0.0,
     room: bool = True,
+    clearance: float | None = None,
 ) -> Iterator[None]:
     """Within the block, ``checker`` counts the robot's contacts with the scene
-    (:func:`scene_bodies`) from ``free_clearance`` apart, and an attached object's with
+    (:func:`scene_bodies`) from ``clearance`` [m] apart (default ``free_clearance``),
+    and an attached object's with
     anything from ``held`` [m] apart (:meth:`~.contacts.ContactChecker.keep_clear`),
     except the pairs of geoms already that near where the motion starts or ends (torso
     + arm ``ends``, each (8,), the base at ``base`` (3,)): those count only nearer
@@ -393,7 +399,7 @@ def keeping_clear(
     episode 9846; ``tools/eval_place_offset.py``).
     """
     bodies = scene_bodies(checker)
-    checker.keep_clear_of(bodies, params.free_clearance)
+    checker.keep_clear_of(bodies, params.free_clearance if clearance is None else clearance)
     if held > 0.0:
         checker.keep_clear(held)
     near: dict[tuple[int, int], float] = {}

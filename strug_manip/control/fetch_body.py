@@ -265,7 +265,14 @@ class FullRobot(Recovery):
             ends = (q_from, q_to)
             return keeping_clear(checker, validity.base, ends, self.params, held, room)
 
-        plan = clear_first(planners, run, clear, self.params)
+        def wide() -> contextlib.AbstractContextManager[None]:
+            w = self.params.wide_clearance
+            ends = (q_from, q_to)
+            return keeping_clear(
+                checker, validity.base, ends, self.params, w if carrying else 0.0, True, w
+            )
+
+        plan = clear_first(planners, run, clear, self.params, wide)
         self.plan_seconds += time.perf_counter() - t
         if not plan.success:
             raise SkillStop(Status.NO_MOTION_PLAN, f"{plan.reason}: {plan.detail}", phase)

@@ -111,6 +111,16 @@ class SkillParams:
             gripper), and a plan that grazed an open drawer pushed it (an elbow on the
             stow after a Place slid the cabinet 1.6 cm; a wrist on the reach knocked a
             drawer shut and slid the cabinet 3 cm).
+        wide_clearance: the full robot's own arm motions (the reach, the stow before a
+            drive, a recovery's stow) first try to keep the robot, and what it carries,
+            this far from the scene [m], where the ends leave that room, before
+            ``free_clearance`` and ``held_clearance``: those keep the believed cabinet's
+            boards at the arm's lag, but perception puts a front or an open door's edge
+            1-2 cm off (a hinge up to 3.7 cm, ``comply_limit``), and a reach that kept
+            its 2 cm from a believed neighbour door put the carried object on the real
+            one and slid the cabinet (OpenDoor episode 10187; an upper arm on an open
+            door, 10165; fingers on a lifted flap, 10180). The planning twin has no arm
+            on the way to the part, so this changes no prediction.
         clear_checks: the OMPL budget per planner of a free motion kept clear
             (``free_clearance``, ``held_clearance``), before the plain plans get
             theirs [validity checks] (about 1 s on an idle core, at the 12,000 to
@@ -224,6 +234,7 @@ class SkillParams:
     free_tolerance: float = 0.2
     held_clearance: float = 0.02
     free_clearance: float = 0.03
+    wide_clearance: float = 0.05
     clear_checks: int = 12_000
     cabinet_motion_limit: float = 0.03
     cabinet_tilt_limit: float = 0.105
