@@ -44,6 +44,7 @@ def test_a_drive_that_meets_the_cabinet_stops_where_it_met_it(ctx) -> None:
         assert moved < DEFAULT_PARAMS.cabinet_motion_limit + STOP_SLACK, (moved, out.summary())
         assert not dragged(moved)
         assert not out.holding
+        assert out.on_the_way  # the real belief update does not weigh its key
     finally:
         world.close()
         believed.close()

@@ -102,6 +102,24 @@ def test_the_real_update_weighs_by_the_confusion_and_a_search_by_the_exact_match
     np.testing.assert_allclose(d.obs_loglik_many(real, states, a), [0.0, MISMATCH])
 
 
+def test_a_real_stop_on_the_way_to_the_part_is_no_evidence(monkeypatch) -> None:
+    """The full robot's reach met the cabinet (``cabinet_moved``, holding the object)
+    where every twin, which has no arm on the way, ran to the part: the key weighs no
+    particle (OpenDoor episode 10187 dropped its true model on such a key)."""
+    d = ManipulationPOMDP("opendoor")
+    a = d.action_space().discretized[0]
+    monkeypatch.setattr(d, "need_worlds", lambda: None)
+    states = [_state("ok"), _state("cabinet_moved", holding=True)]
+    key = observation_key("cabinet_moved", True, np.array([0.05, 0.02, 0.0]))
+    from strug_manip.domains.manipulation.state import ManipObservation
+
+    way = ManipObservation(key, np.zeros((3, 3)), "", news=False, on_the_way=True)
+    np.testing.assert_allclose(d.obs_loglik_many(way, states, a), [0.0, 0.0])
+    at_part = ManipObservation(key, np.zeros((3, 3)), "", news=False)
+    ll = d.obs_loglik_many(at_part, states, a)
+    assert ll[0] < ll[1] <= 0.0
+
+
 def test_the_rule_is_chosen_by_argument_then_environment_then_default(monkeypatch) -> None:
     monkeypatch.delenv(twin_keys.TWIN_KEYS_ENV, raising=False)
     assert twin_keys.twin_keys_rule() == twin_keys.DEFAULT_TWIN_KEYS

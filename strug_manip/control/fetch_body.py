@@ -74,7 +74,7 @@ from strug_manip.control.motion import (
     escape_start,
 )
 from strug_manip.control.navigation import plan_route
-from strug_manip.control.outcome import Outcome, SkillStop, Status
+from strug_manip.control.outcome import REACH, Outcome, SkillStop, Status
 from strug_manip.control.params import DEFAULT_PARAMS, SkillParams
 from strug_manip.control.placement import Placement, find_placement
 from strug_manip.control.plan import Grip, Line, SkillPlan
@@ -168,7 +168,7 @@ class FullRobot(Recovery):
             self._plan = plan
             placement, free = self._plan_free(plan)
             plan = placement.plan  # the fingers may be swapped
-            phase = "reach"
+            phase = REACH
             self._key("start")
             self._free_motion(free)
             self._key("pre-grasp")
@@ -188,7 +188,7 @@ class FullRobot(Recovery):
             self._key("end")
         except SkillStop as stop:
             detail = stop.detail
-            if phase == "reach":  # on the way: what it carries or its arm met something
+            if phase == REACH:  # on the way: what it carries or its arm met something
                 detail += self._withdraw()
             elif phase != "plan":  # the hand is at the part: let go, back off
                 detail += self._recover()
@@ -308,7 +308,7 @@ class FullRobot(Recovery):
         finally:
             self.plan_seconds += time.perf_counter() - t
         if route is None:
-            raise SkillStop(Status.NO_MOTION_PLAN, "no collision-free route for the base", "reach")
+            raise SkillStop(Status.NO_MOTION_PLAN, "no collision-free route for the base", REACH)
         return route
 
     # -- motions -------------------------------------------------------------------------
@@ -344,7 +344,7 @@ class FullRobot(Recovery):
         turn = abs(wrap_to(placement.base[2], self.drv.base[2]) - self.drv.base[2]) > 0.02
         after = self._plan_after(placement)
         if not (far or turn):
-            reach = self._plan_arm(self.drv.q, q_pre, carrying, phase="reach")
+            reach = self._plan_arm(self.drv.q, q_pre, carrying, phase=REACH)
             return FreeMotion(None, None, None, reach, after)
         drive_q = drive_posture(carrying)
         stow = None
@@ -357,7 +357,7 @@ class FullRobot(Recovery):
             torso = float(q_pre[0])
             start = start.copy()
             start[0] = torso
-        reach = self._plan_arm(start, q_pre, carrying, base=placement.base, phase="reach")
+        reach = self._plan_arm(start, q_pre, carrying, base=placement.base, phase=REACH)
         return FreeMotion(stow, route, torso, reach, after)
 
     def _plan_after(self, placement: Placement) -> np.ndarray:

@@ -62,6 +62,12 @@ class SkillStop(Exception):  # noqa: N818 (control flow, not an error of the cal
         self.status, self.detail, self.phase = status, detail, phase
 
 
+#: The phase of the way to the part: the stow before a drive, the drive, the reach to
+#: the pre-grasp (:class:`~.fetch_body.FullRobot`; the planning twin's hand enters the
+#: scene at the pre-grasp and has none).
+REACH = "reach"
+
+
 @dataclass(frozen=True, eq=False)
 class Outcome:
     """The facts of one skill execution (full robot or planning twin).
@@ -113,6 +119,14 @@ class Outcome:
     def ok(self) -> bool:
         """The skill ran to its end (``status == ok``)."""
         return self.status is Status.OK
+
+    @property
+    def on_the_way(self) -> bool:
+        """It stopped after the robot moved but before the hand reached the part: the
+        arm, or what it carries, met something in the drive or the reach
+        (``cabinet_moved``, ``collision``). What the part would have done is not
+        shown."""
+        return self.phase == REACH and self.status in (Status.CABINET_MOVED, Status.COLLISION)
 
     @property
     def cannot_reach(self) -> bool:

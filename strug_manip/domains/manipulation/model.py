@@ -362,10 +362,13 @@ class ManipulationPOMDP(GenerativePOMDP):
     def obs_loglik_many(self, o: Any, states: list[Any], a: Hashable) -> np.ndarray:
         """The key's likelihood per state, times (real observations) the cloud's. A
         real key's status is weighed by :attr:`confusion` when there is one (a search's
-        keys, twin against twin, by the exact match)."""
+        keys, twin against twin, by the exact match). A real key is no evidence where
+        nothing moved, or where the robot stopped on its way to the part
+        (:attr:`.state.ManipObservation.on_the_way`)."""
         a = self.check_action(a)
         w = self.need_worlds()
-        if o.cloud is not None and int(o.key[0]) in BEFORE_MOTION_CODES:  # no evidence
+        real = o.cloud is not None
+        if real and (int(o.key[0]) in BEFORE_MOTION_CODES or o.on_the_way):  # no evidence
             out = np.zeros(len(states))
         else:
             conf = self.confusion if o.cloud is not None else None

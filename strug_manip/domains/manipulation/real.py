@@ -322,7 +322,9 @@ class RealEnvironment:
         scene = world.cabinet_key()
         news, real.weighed = scene != real.weighed, scene
         model.timers.real += time.perf_counter() - t0
-        obs = ManipObservation(observation_key(status, holding, motion), cloud, summary, news)
+        way = out is not None and out.on_the_way
+        key = observation_key(status, holding, motion)
+        obs = ManipObservation(key, cloud, summary, news, on_the_way=way)
         if self.health is not None and self.belief is not None:
             name = model.action_space().name(a)
             done_step = RealStep(s.t, a, name, planned, obs.key, r, news, model.root.rep(a))

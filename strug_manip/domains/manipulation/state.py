@@ -90,12 +90,18 @@ class ManipObservation:
             changed is the same misfit again (perception's error, not independent
             noise), and weighing it at every step compounds one piece of evidence
             into certainty.
+        on_the_way: the full robot stopped on its way to the part (the drive or the
+            reach met something: :attr:`~strug_manip.control.Outcome.on_the_way`). The
+            twins have no arm on the way, so their keys predict a run that reached the
+            part, and a key that differs from theirs says nothing about the part: the
+            real update does not weigh it (the cloud still, when it is news).
     """
 
     key: tuple[float, ...]
     cloud: np.ndarray | None = field(default=None, repr=False)
     summary: str = ""
     news: bool = True
+    on_the_way: bool = False
 
 
 def observation_key(status: str, holding: bool, motion: np.ndarray) -> tuple[float, ...]:
