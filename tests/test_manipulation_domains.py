@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import re
+from types import SimpleNamespace
 
 import mujoco
 import numpy as np
@@ -32,6 +33,7 @@ from strug_manip.domains.manipulation.health import status_of
 from strug_manip.domains.manipulation.real import MATCH_RADIUS
 from strug_manip.domains.manipulation.rules import BEFORE_MOTION, REPEATS_ITSELF, UNCHANGED
 from strug_manip.domains.manipulation.state import (
+    STATUS_CODES,
     ManipObservation,
     ManipState,
     observation_key,
@@ -881,6 +883,36 @@ def test_a_real_opening_that_cannot_start_is_planned_in_the_next_holder(
         assert len(d.real.outcomes) == n0 + 1  # one step, whatever was planned
     finally:
         _undo_real_steps(d, s0, belief, n0)
+
+
+def test_a_real_place_is_planned_in_the_likeliest_models_whose_twins_can(
+    drawer_episode, monkeypatch
+):
+    """The full robot plans a Place into a part in up to PLAN_MODELS models, likeliest
+    first, one state each, skipping the models whose twins cannot make it: the real
+    hold is not the twins', and a place that could not start in the likeliest model
+    ran in the next (OpenDoor episode 10153). Pick plans in one."""
+    d, _, belief = drawer_episode
+    d.environment.condition(belief)
+    rng = np.random.default_rng(0)
+    k = next(k for k, part in enumerate(d.parts) if sum(x is not None for x in part.links) >= 4)
+    place = ManipAction("Place", k)
+    order = [belief.states[j] for j in np.argsort(-belief.weights, kind="stable")]
+    holders = list(dict.fromkeys(s.origin for s in order if d.parts[k].links[s.origin] is not None))
+    cannot = holders[1]  # the second likeliest model's twins cannot place
+    code = {True: float(STATUS_CODES["ik_infeasible"]), False: float(STATUS_CODES["ok"])}
+
+    def step(s, a, rng):
+        return SimpleNamespace(obs=SimpleNamespace(key=(code[s.origin == cannot],)))
+
+    monkeypatch.setattr(d, "step", step)
+    models = d.environment.plan_models(place, rng)
+    want = [i for i in holders if i != cannot][:PLAN_MODELS]
+    assert [i for i, _ in models] == want
+    first = {i: next(s.sim for s in order if s.origin == i) for i in want}
+    assert all(sim is first[i] for i, sim in models)  # each in its likeliest state
+    pick = d.environment.plan_models(ManipAction("Pick", grasp="top"), rng)
+    assert [i for i, _ in pick] == [next(s.origin for s in order if s.origin != cannot)]
 
 
 def test_the_real_pick_routes_in_the_models_current_state(drawer_episode, monkeypatch):

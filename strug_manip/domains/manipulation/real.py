@@ -41,6 +41,7 @@ from strug_manip.control.skills import holds_object
 from strug_manip.domains.manipulation import conditioning
 from strug_manip.domains.manipulation.actions import SAME_PART, TABLE, ManipAction, label
 from strug_manip.domains.manipulation.catalogue import (
+    PLAN_MODELS,
     Root,
     representatives,
 )
@@ -346,35 +347,57 @@ class RealEnvironment:
         while a plan stops before anything moves, each with its state: for an opening
         or a probe, :meth:`.catalogue.Root.plan_models` (the hypothesis's
         representative, then its next likeliest holders with weight, as the twins try
-        them), each in its likeliest current state; for Pick and Place, one model
-        (:meth:`likeliest`)."""
+        them), each in its likeliest current state; for a Place into a part, up to
+        :data:`~.catalogue.PLAN_MODELS` models that can make it (:meth:`able`); for
+        Pick and the Place onto the table, one (:meth:`likeliest`)."""
         model = self.model
         w = model.need_worlds()
-        if a.skill in ("Pick", "Place"):
+        if a.skill == "Pick" or a.part == TABLE:
             return [self.likeliest(a, rng)]
+        if a.skill == "Place":
+            # The real hold is not the twins' (the object sits a few millimetres off
+            # where their hands hold it), and a place the likeliest model's twin made
+            # could not start on the full robot, where the next models' places ran
+            # (OpenDoor episode 10153: model 10 ik_infeasible, 8, 19 and 18 ok).
+            return self.able(a, rng, PLAN_MODELS)
         return [(i, model.root.best.get(i) or w.initial[i]) for i in model.root.plan_models(a)]
 
     def likeliest(self, a: ManipAction, rng: np.random.Generator) -> tuple[int, WorldState]:
-        """The model the real robot plans Pick or Place against, and its state: the
-        likeliest particle that has the action's part and whose twin can
-        make the action (not ``ik_infeasible``, not :data:`NOT_APPLICABLE`; the search
-        chose the action for the models that can, and a plan made in one that cannot
-        fails before anything moves), else the likeliest that has the part."""
+        """The model the real robot plans Pick or Place against first, and its state:
+        the first of :meth:`able`."""
+        return self.able(a, rng, 1)[0]
+
+    def able(
+        self, a: ManipAction, rng: np.random.Generator, n: int
+    ) -> list[tuple[int, WorldState]]:
+        """Up to ``n`` models (an int >= 1) to plan Pick or Place against, likeliest
+        first, each in its likeliest state that has the action's part and whose twin
+        can make the action (not ``ik_infeasible``, not :data:`NOT_APPLICABLE`: the
+        search chose the action for the models that can, and a plan made in one that
+        cannot fails before anything moves); if none can, the likeliest that has the
+        part."""
         model = self.model
         w = model.need_worlds()
         b = self.belief
         if b is None:
-            return 0, w.initial[0]
+            return [(0, w.initial[0])]
         order = np.argsort(-b.weights, kind="stable")
         states = [b.states[j] for j in order]
         links = model.parts[a.part].links if a.skill == "Place" and a.part != TABLE else None
         has = [s for s in states if links is None or links[s.origin] is not None]
         cannot = {STATUS_CODES[x] for x in CANNOT_START}
+        out: dict[int, WorldState] = {}
         for s in has:  # the twins' outcomes are cached from the search, mostly
+            if s.origin in out:
+                continue
             if model.step(s, a, rng).obs.key[0] not in cannot:
-                return s.origin, s.sim
-        s = has[0] if has else states[0]
-        return s.origin, s.sim
+                out[s.origin] = s.sim
+                if len(out) == n:
+                    break
+        if not out:
+            s = has[0] if has else states[0]
+            out[s.origin] = s.sim
+        return list(out.items())
 
     def real_link(self, k: int, within: float = np.inf) -> str | None:
         """The true cabinet's part (link) at catalogued part ``k``, which an opening or
