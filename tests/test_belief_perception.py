@@ -12,14 +12,14 @@ import pytest
 import scipy.stats
 
 from perception.errors import BadInputError
-from perception.fusion import fuse
+from perception.fusion import PartHypothesis, fuse
 from perception.inputs import check_view
 from perception.likelihood import log_likelihood, quantile_hausdorff
 from perception.parts import extract
 from planners.errors import ConfigError
-from strug_manip.domains.manipulation.belief import BeliefConfig, sample_particles
+from strug_manip.domains.manipulation.belief import BeliefConfig, closed_handle, sample_particles
 from strug_manip.objects import generator as gen
-from strug_manip.objects.assembly import FRONT
+from strug_manip.objects.assembly import BAR, FRONT
 from strug_manip.objects.partnet import cabinet_urdf
 from strug_manip.world.perception_data import render_episode
 from strug_manip.world.sim import ManipulationWorld
@@ -310,3 +310,33 @@ def test_a_door_whose_handle_no_view_showed_mostly_gets_one_in_the_cabinets_styl
     assert all(d.handle == "none" for d in doors_from_k(none_seen))
     with pytest.raises(ConfigError, match="unseen_handle"):
         BeliefConfig(unseen_handle=1.5)
+
+
+def _hypothesis(handle: np.ndarray, style: str = "bar") -> PartHypothesis:
+    rect = np.array([-0.2, 0.2, 0.2, 0.5])
+    return PartHypothesis(
+        rect=rect, rect_std=np.zeros(4), class_prob=np.array([0.0, 0.5, 0.5]), existence=1.0,
+        hinge_prob=np.full(4, 0.25), door_rect=np.tile(rect, (4, 1)), door_q=np.zeros(4),
+        q_drawer=0.0, q_std=0.0, handle=handle, handle_score=0.9, views=1, visible=1, merged=0,
+        shelf=False, handle_style=style,
+    )  # fmt: skip
+
+
+def test_a_bar_read_on_its_fronts_face_stands_out_at_the_bars_standoff() -> None:
+    """A bar's grasp point read on the face behind it (front frame x = 0: the bar's few
+    pixels gave the face's depth; OpenDoor 10169, every opening ``ik_infeasible``)
+    stands out at the standoff a bar has (``BAR``); one read 2 cm out, and a knob's, stay
+    where they were read. Front frame: the closed front's face at x = 0."""
+    axis, origin = np.array([0.0, 0.0, 1.0]), np.array([0.0, -0.2, 0.35])
+    face = np.array([0.0, 0.15, 0.35])
+    np.testing.assert_allclose(closed_handle(_hypothesis(face), "door", axis, origin, 0.0),
+                               [BAR[2], 0.15, 0.35])  # fmt: skip
+    out = np.array([0.02, 0.15, 0.35])
+    np.testing.assert_allclose(closed_handle(_hypothesis(out), "door", axis, origin, 0.0), out)
+    knob = _hypothesis(face, "knob")
+    np.testing.assert_allclose(closed_handle(knob, "door", axis, origin, 0.0), face)
+    # A drawer seen 5 cm out, its bar read on its face: closed, on the carcass's front.
+    seen = np.array([0.05, 0.0, 0.3])
+    pull = np.array([1.0, 0.0, 0.0])
+    np.testing.assert_allclose(closed_handle(_hypothesis(seen), "drawer", pull, origin, 0.05),
+                               [BAR[2], 0.0, 0.3])  # fmt: skip

@@ -59,6 +59,7 @@ from planners.errors import ConfigError, check_positive_int
 from strug_manip.geometry import axis_angle
 from strug_manip.objects import generator as gen
 from strug_manip.objects.assembly import (
+    BAR,
     FRONT,
     GAP,
     SHELF_BOARD,
@@ -72,6 +73,14 @@ from strug_manip.objects.assembly import (
 from strug_manip.objects.generator import CabinetSpec
 from strug_manip.world.scene import cabinet_pose
 
+#: A bar's grasp point read nearer its front's face than this [m] (front frame: the
+#: closed front's face at x = 0) was read on the face behind the bar: the generator's
+#: bars stand 2.5-4 cm out (``BAR_STANDOFF``), and a grasp at the face closes the fingers
+#: in the panel. The thin bar (13 mm across) gives the head camera few pixels, and on
+#: OpenDoor episode 10169 perception put its grasp point 3.9 cm behind the true one, on
+#: the door's face: every opening was ``ik_infeasible`` (the approach's hand in the
+#: door), in every model, where the oracle opened it.
+ON_THE_FACE = 0.0125
 #: Opening axis of a door hinged on each side, front frame (the generator's e x n).
 SIDE_AXES = {
     "left": np.array([0.0, 0.0, -1.0]),
@@ -225,15 +234,21 @@ def _floored(p: np.ndarray, floor: float, allowed: np.ndarray | None = None) -> 
     return p / p.sum()
 
 
-def _closed_handle(
+def closed_handle(
     h: PartHypothesis, kind: str, axis: np.ndarray, origin: np.ndarray, q: float
 ) -> np.ndarray | None:
-    """The seen grasp point moved back to where it is with the part closed."""
+    """The seen grasp point moved back to where it is with the part closed; a bar's
+    read on its front's face (nearer it than :data:`ON_THE_FACE`) stood out
+    :data:`~strug_manip.objects.assembly.BAR`'s standoff."""
     if h.handle is None:
         return None
     if kind == "drawer":
-        return h.handle - q * axis
-    return origin + axis_angle(axis, -q) @ (h.handle - origin)
+        closed = h.handle - q * axis
+    else:
+        closed = origin + axis_angle(axis, -q) @ (h.handle - origin)
+    if h.handle_style == "bar" and closed[0] < ON_THE_FACE:
+        closed = np.array([BAR[2], closed[1], closed[2]])
+    return closed
 
 
 def seen_style(f: FusedCabinet) -> str | None:
@@ -278,7 +293,7 @@ def _draw_part(
             # particle's box itself keeps one share, assembly.DRAWER_BOX).
             box_depth = float(rng.uniform(*gen.DRAWER_DEPTH_FRAC)) * (depth - FRONT - 0.01)
             upper = max(float(rng.uniform(*gen.DRAWER_TRAVEL_FRAC)) * box_depth, q + 0.01)
-            handle = _closed_handle(h, "drawer", axis, origin, q) if len(rects) == 1 else None
+            handle = closed_handle(h, "drawer", axis, origin, q) if len(rects) == 1 else None
             out.append(
                 PartModel(
                     "drawer",
@@ -315,7 +330,7 @@ def _draw_part(
     q = max(0.0, float(h.door_q[side_i]) + rng.normal(0.0, cfg.q_noise))
     limits = gen.DOOR_SIDE_LIMIT if side in ("left", "right") else gen.DOOR_FLAP_LIMIT
     upper = max(float(rng.uniform(*limits)), q + 0.02)
-    handle = _closed_handle(h, "door", axis, origin, q)
+    handle = closed_handle(h, "door", axis, origin, q)
     if handle is not None and side in ("left", "right") and not (y0 <= handle[1] <= y1):
         handle = None  # the seen handle does not fit this interpretation's panel
     # A handle no view showed, where the generator puts one (handle_pos None).
