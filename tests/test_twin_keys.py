@@ -13,6 +13,7 @@ import pytest
 
 from planners.errors import ConfigError, UnknownNameError
 from strug_manip.domains.manipulation import twin_keys
+from strug_manip.domains.manipulation.actions import ManipAction
 from strug_manip.domains.manipulation.model import MISMATCH, ManipulationPOMDP, key_loglik
 from strug_manip.domains.manipulation.state import ManipState, observation_key
 
@@ -118,6 +119,30 @@ def test_a_real_stop_on_the_way_to_the_part_is_no_evidence(monkeypatch) -> None:
     at_part = ManipObservation(key, np.zeros((3, 3)), "", news=False)
     ll = d.obs_loglik_many(at_part, states, a)
     assert ll[0] < ll[1] <= 0.0
+
+
+def test_a_real_pick_or_place_on_the_table_weighs_no_object_motion(monkeypatch) -> None:
+    """Where the hand carried the object to or from the table is the full robot's: a
+    real Pick's key weighs its status and grip, not the object's motion (OpenDoor
+    10166 dropped its true model on one); a Place into a part, and every key inside a
+    search, weigh it."""
+    d = ManipulationPOMDP("opendoor")
+    monkeypatch.setattr(d, "need_worlds", lambda: None)
+    monkeypatch.setattr(d, "check_action", lambda a: a)  # no episode: no catalogue
+    moved = ManipState(0, None, 1, observation_key("ok", True, np.array([0.15, 0.0, 0.0])))
+    still = _state("ok", holding=True)
+    key = observation_key("ok", True, np.array([0.55, 0.15, 0.25]))
+    from strug_manip.domains.manipulation.state import ManipObservation
+
+    real = ManipObservation(key, np.zeros((3, 3)), "", news=False)
+    pick = ManipAction("Pick", grasp="side")
+    np.testing.assert_allclose(d.obs_loglik_many(real, [moved, still], pick), [0.0, 0.0])
+    search = ManipObservation(key, None, "")
+    ll = d.obs_loglik_many(search, [moved, still], pick)
+    assert ll[0] < -10.0 and ll[1] < ll[0]
+    place = ManipAction("Place", 0)
+    ll = d.obs_loglik_many(real, [moved, still], place)
+    assert ll[1] < ll[0] < -10.0
 
 
 def test_the_rule_is_chosen_by_argument_then_environment_then_default(monkeypatch) -> None:
