@@ -12,10 +12,12 @@ import contextlib
 from collections.abc import Iterator
 
 import numpy as np
+import pytest
 
 from strug_manip.control import Pick, fetch_body
 from strug_manip.control.executor import clear_first
 from strug_manip.control.motion import NO_PLAN, MotionPlan
+from strug_manip.control.navigation import plan_route
 from strug_manip.control.params import DEFAULT_PARAMS
 from strug_manip.world.scene import SceneConfig
 from strug_manip.world.sim import ManipulationWorld
@@ -95,3 +97,24 @@ def test_the_full_robots_arm_motions_ask_for_the_wide_berth(monkeypatch, ctx) ->
         world.close()
     assert out.ok, out.summary()
     assert asked and all(asked), asked
+
+
+def test_the_full_robots_route_keeps_the_wide_berth_where_it_can(monkeypatch, ctx) -> None:
+    """The base's route is planned first with the scene's geoms kept ``wide_clearance``
+    off (their collision margin); a route swept the real door the robot had opened
+    shut on the way to the table (OpenDoor 10166)."""
+    margins: list[float] = []
+
+    def spy(checker, start, goal, arm):
+        margins.append(float(checker.model.geom_margin.max()))
+        return plan_route(checker, start, goal, arm)
+
+    monkeypatch.setattr(fetch_body, "plan_route", spy)
+    world = ManipulationWorld(SceneConfig(cabinet_seed=25, cabinet_kinds=("door",)))
+    try:
+        world.reset()
+        out = Pick("object", "side").run(world, ctx=ctx)
+    finally:
+        world.close()
+    assert out.ok, out.summary()
+    assert margins and margins[0] == pytest.approx(DEFAULT_PARAMS.wide_clearance), margins

@@ -371,7 +371,7 @@ def scene_bodies(checker: ContactChecker) -> list[int]:
 @contextlib.contextmanager
 def keeping_clear(
     checker: ContactChecker,
-    base: np.ndarray,
+    base: np.ndarray | None,
     ends: Sequence[np.ndarray],
     params: SkillParams,
     held: float = 0.0,
@@ -383,7 +383,8 @@ def keeping_clear(
     and an attached object's with
     anything from ``held`` [m] apart (:meth:`~.contacts.ContactChecker.keep_clear`),
     except the pairs of geoms already that near where the motion starts or ends (torso
-    + arm ``ends``, each (8,), the base at ``base`` (3,)): those count only nearer
+    + arm ``ends``, each (8,), the base at ``base`` (3,); or, ``base`` None, whole
+    configurations base + torso + arm, each (11,): a route's): those count only nearer
     than they are there (less :data:`EXCUSE_SLACK`), so the path keeps what room the
     ends leave (``room``; else only where they touch). Afterwards the plain check is
     back.
@@ -404,7 +405,7 @@ def keeping_clear(
         checker.keep_clear(held)
     near: dict[tuple[int, int], float] = {}
     for q in ends:
-        pairs, gaps = checker.geom_gaps(np.r_[base, q])
+        pairs, gaps = checker.geom_gaps(q if base is None else np.r_[base, q])
         for (a, b), gap in zip(pairs.tolist(), gaps.tolist(), strict=True):
             key = (min(a, b), max(a, b))
             near[key] = min(near.get(key, np.inf), gap - EXCUSE_SLACK if room else 0.0)

@@ -301,10 +301,22 @@ class FullRobot(Recovery):
 
     def _route(self, target: np.ndarray, arm: np.ndarray, carrying) -> list[np.ndarray]:
         """Base poses to drive through to ``target`` with the arm at ``arm`` (its drive
-        posture) and what it carries (:func:`~strug_manip.control.navigation.plan_route`)."""
+        posture) and what it carries (:func:`~strug_manip.control.navigation.plan_route`),
+        keeping ``wide_clearance`` from the scene where a route can, else touching
+        nothing."""
         t = time.perf_counter()
+        checker, start = self._checker(carrying), self.drv.base
         try:
-            route = plan_route(self._checker(carrying), self.drv.base, target, arm)
+            # First with the arm motions' wide berth (what the ends leave): a route
+            # planned touching-free in the believed cabinet swept the real door it had
+            # swung open 0.34 rad shut on the way to the table (OpenDoor 10166).
+            ends = (np.r_[start, arm], np.r_[target, arm])
+            w = self.params.wide_clearance
+            held = w if carrying is not None else 0.0
+            with keeping_clear(checker, None, ends, self.params, held, True, w):
+                route = plan_route(checker, start, target, arm)
+            if route is None:
+                route = plan_route(checker, start, target, arm)
         finally:
             self.plan_seconds += time.perf_counter() - t
         if route is None:
