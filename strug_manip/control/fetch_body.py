@@ -308,8 +308,9 @@ class FullRobot(Recovery):
         checker, start = self._checker(carrying), self.drv.base
         try:
             # First with the arm motions' wide berth (what the ends leave): a route
-            # planned touching-free in the believed cabinet swept the real door it had
-            # swung open 0.34 rad shut on the way to the table (OpenDoor 10166).
+            # planned touching-free in the believed cabinet runs past a door the robot
+            # swung open, which perception puts centimetres off. (On OpenDoor 10166 the
+            # torso still met the real door: the base cut the route's corner by 4.6 cm.)
             ends = (np.r_[start, arm], np.r_[target, arm])
             w = self.params.wide_clearance
             held = w if carrying is not None else 0.0
