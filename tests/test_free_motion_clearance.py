@@ -14,7 +14,7 @@ from collections.abc import Iterator
 import numpy as np
 import pytest
 
-from strug_manip.control import Pick, fetch_body
+from strug_manip.control import Outcome, Pick, fetch_body
 from strug_manip.control.executor import clear_first
 from strug_manip.control.motion import NO_PLAN, MotionPlan
 from strug_manip.control.navigation import plan_route
@@ -80,6 +80,17 @@ def test_a_wide_berth_that_finds_nothing_falls_back_to_touching_nothing() -> Non
     )
 
 
+def pick_at_the_table(ctx) -> Outcome:
+    """The full robot's side Pick from its start, in the doors-only scene of generator
+    seed 25 (it drives to the object's table, then reaches)."""
+    world = ManipulationWorld(SceneConfig(cabinet_seed=25, cabinet_kinds=("door",)))
+    try:
+        world.reset()
+        return Pick("object", "side").run(world, ctx=ctx)
+    finally:
+        world.close()
+
+
 def test_the_full_robots_arm_motions_ask_for_the_wide_berth(monkeypatch, ctx) -> None:
     """The reach (and the stow before the drive) of a Pick plan with the wide round."""
     asked: list[bool] = []
@@ -89,20 +100,15 @@ def test_the_full_robots_arm_motions_ask_for_the_wide_berth(monkeypatch, ctx) ->
         return clear_first(planners, run, clear, params, wide)
 
     monkeypatch.setattr(fetch_body, "clear_first", spy)
-    world = ManipulationWorld(SceneConfig(cabinet_seed=25, cabinet_kinds=("door",)))
-    try:
-        world.reset()
-        out = Pick("object", "side").run(world, ctx=ctx)
-    finally:
-        world.close()
+    out = pick_at_the_table(ctx)
     assert out.ok, out.summary()
     assert asked and all(asked), asked
 
 
 def test_the_full_robots_route_keeps_the_wide_berth_where_it_can(monkeypatch, ctx) -> None:
     """The base's route is planned first with the scene's geoms kept ``wide_clearance``
-    off (their collision margin); a route swept the real door the robot had opened
-    shut on the way to the table (OpenDoor 10166)."""
+    off (their collision margin): it passes the doors the robot swung open, which
+    perception puts centimetres off."""
     margins: list[float] = []
 
     def spy(checker, start, goal, arm):
@@ -110,11 +116,6 @@ def test_the_full_robots_route_keeps_the_wide_berth_where_it_can(monkeypatch, ct
         return plan_route(checker, start, goal, arm)
 
     monkeypatch.setattr(fetch_body, "plan_route", spy)
-    world = ManipulationWorld(SceneConfig(cabinet_seed=25, cabinet_kinds=("door",)))
-    try:
-        world.reset()
-        out = Pick("object", "side").run(world, ctx=ctx)
-    finally:
-        world.close()
+    out = pick_at_the_table(ctx)
     assert out.ok, out.summary()
     assert margins and margins[0] == pytest.approx(DEFAULT_PARAMS.wide_clearance), margins
