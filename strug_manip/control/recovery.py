@@ -66,13 +66,13 @@ class Recovery:
         )
 
     def _withdraw(self) -> str:
-        """After a stop on the way to the part (the object carried, or the arm, met the
-        cabinet: ``cabinet_moved``): the arm and base hold where they stopped, then the
-        arm stows (OMPL, monitored), what it carries kept. Without the hold the servos
-        went on pushing to the stopped path's next command while the run settled: a
-        ``Place`` whose held object met a shelf 6 cm lower than believed stopped at a
-        3 cm slide and left the cabinet 0.15 m from where it stood (OpenDoor episode
-        10187). Returns "" or what failed."""
+        """After a stop on the way to the part (the object carried, or the arm, met
+        something: ``cabinet_moved``, ``collision``): the arm and base hold where they
+        stopped, then the arm stows (OMPL, monitored), what it carries kept. Without the
+        hold the servos went on pushing to the stopped path's next command while the
+        run settled: a ``Place`` whose carried object met the closed door beside its
+        cell on the reach stopped at a 3 cm slide and left the cabinet 0.15 m from
+        where it stood (OpenDoor episode 10187). Returns "" or what failed."""
         carrying = self._hold_here()
         self.drv.hold(self.params.settle_time)
         return self._stow(carrying, self._guard.here())
