@@ -407,23 +407,13 @@ class FullRobot(Recovery):
         if free.stow is not None:
             self.drv.follow(list(free.stow), 0.3, monitor=self._line_monitor(None))
             self.drv.hold(self.params.settle_time)
-        if free.route is not None:  # a base that meets the cabinet stops (cabinet_moved)
-            self.drv.drive(free.route, torso=free.torso, monitor=self._drive_monitor())
+        if free.route is not None:
+            # Watched: a route planned in the believed cabinet, which the real one stands
+            # a few centimetres from, drove the carried object into it unwatched and
+            # slid it 0.27 m before the reach's first check (OpenDoor 10188, POMCPOW).
+            self.drv.drive(free.route, torso=free.torso, monitor=self._watch("drive"))
         self.drv.follow(list(free.reach), 0.3, monitor=self._line_monitor(None))
         self.drv.hold(self.params.settle_time)
-
-    def _drive_monitor(self) -> Callable[[float], None]:
-        """Stops a drive once the cabinet has slid or tipped past its guards since the
-        skill started: a route planned in the believed cabinet, which the real one
-        stands a few centimetres from (a slide earlier in the episode, perception's
-        error), drove the carried object into it unwatched and slid it 0.27 m before
-        the reach's first check (OpenDoor episode 10188, POMCPOW's second Place)."""
-        guard = self._guard
-
-        def monitor(_: float) -> None:
-            guard.check("drive")
-
-        return monitor
 
     def _touched(self) -> list[str]:
         """The bodies the current skill's lines may touch (its part, the object)."""

@@ -54,9 +54,8 @@ class Recovery:
         since = self._guard.here()
         if backs_off:
             try:
-                self.drv.follow(
-                    list(track.q), max(0.3, length / p.retreat_speed), monitor=self._watch(since)
-                )
+                seconds = max(0.3, length / p.retreat_speed)
+                self.drv.follow(list(track.q), seconds, monitor=self._watch("recovery", since))
             except SkillStop as stop:
                 return self._stopped_here(stop)
             self.drv.hold(p.settle_time)
@@ -84,12 +83,12 @@ class Recovery:
         keeps = keeps_object(self._plan, self.drv.grip_cmd, self._fingers())
         return self._carried() if keeps else None
 
-    def _watch(self, since: Mark) -> Callable[[float], None]:
-        """A monitor stopping a recovery's motion (``cabinet_moved``) once the cabinet
-        has moved past the guards' limits from ``since``."""
+    def _watch(self, name: str, since: Mark | None = None) -> Callable[[float], None]:
+        """A monitor stopping the motion ``name`` (``cabinet_moved``) once the cabinet
+        has moved past the guards' limits from ``since`` (default: the skill's start)."""
 
         def monitor(_: float) -> None:
-            self._guard.check("recovery", since)
+            self._guard.check(name, since)
 
         return monitor
 
@@ -108,7 +107,7 @@ class Recovery:
         except SkillStop as stop:
             return f"; recovery: the arm stays out ({stop.detail})"
         try:
-            self.drv.follow(list(path), 0.3, monitor=self._watch(since))
+            self.drv.follow(list(path), 0.3, monitor=self._watch("recovery", since))
         except SkillStop as stop:
             return self._stopped_here(stop)
         self.drv.hold(self.params.settle_time)
