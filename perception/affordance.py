@@ -27,7 +27,7 @@ from __future__ import annotations
 import numpy as np
 
 from perception.errors import BadInputError
-from perception.fusion import FusedCabinet
+from perception.fusion import FusedCabinet, handle_middle
 
 #: Exponent and floor of the sampling weights.
 SHARPNESS, FLOOR = 2.0, 1e-4
@@ -88,10 +88,9 @@ def sample_grasps(
     normal = front.dir_to_world([1.0, 0.0, 0.0])
     kind = joint_type or h.joint_type
     handle = pts[pull > HANDLE_P]
-    middle = along = None
-    if len(handle) >= 5:
+    middle, along = handle_middle(handle, front), None
+    if middle is not None:
         local = front.to_front(handle)[:, 1:]
-        middle = np.median(local, axis=0)
         _, _, vt = np.linalg.svd(local - local.mean(axis=0), full_matrices=False)
         along = vt[0]
         bar = front.dir_to_world([0.0, *along])

@@ -196,6 +196,32 @@ def test_the_handle_shape_tells_a_bar_from_a_knob() -> None:
     assert handle_shape([], FRONT) == ("bar", None)
 
 
+def test_a_bars_grasp_point_is_its_middle_at_the_peaks_standoff() -> None:
+    """Two views whose pull peaks near a 16 cm upright bar's ends (0.05 m and 0.065 m
+    below its middle at 0.72 m) and on it (3.5 cm out): the part's grasp point is the
+    bar's middle, at the peaks' standoff, though the bar's pixels spill onto the face
+    (x = 0) around it; with too few handle pixels it stays the peaks' median."""
+    bar = np.stack([np.full(40, 0.035), np.full(40, 0.3), np.linspace(0.64, 0.80, 40)], axis=1)
+    side = np.tile([0.28, 0.32], 10)
+    spill = np.stack([np.zeros(20), side, np.linspace(0.64, 0.80, 20)], axis=1)
+    rect = [0.1, 0.35, 0.5, 0.9]
+    group = []
+    for k, peak_z in enumerate((0.67, 0.655)):
+        r = _reading(k, rect, 500)
+        peak = np.array([0.035, 0.3, peak_z])
+        pixels = np.concatenate([bar, spill])
+        inst = dataclass_replace(r.instance, handle=peak, handle_score=0.9, handle_points=pixels)
+        group.append(dataclass_replace(r, instance=inst))
+    h = _summarise(group, 0, 2, FRONT).handle
+    assert h is not None
+    assert abs(h[2] - 0.72) < 0.005 and abs(h[1] - 0.3) < 0.005
+    assert abs(h[0] - 0.035) < 1e-9  # the standoff is the peaks', not the spill's
+    few = [dataclass_replace(r, instance=dataclass_replace(r.instance, handle_points=bar[:2]))
+           for r in group]  # fmt: skip
+    h = _summarise(few, 0, 2, FRONT).handle
+    assert h is not None and abs(h[2] - 0.6625) < 1e-9
+
+
 def _grid(y: tuple[float, float], z: tuple[float, float], x: float, step: float = 0.005):
     """Points of a front-facing rectangle at ``x`` (world +x toward the camera) [m]."""
     ys, zs = np.meshgrid(np.arange(*y, step), np.arange(*z, step))
