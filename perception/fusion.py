@@ -710,11 +710,13 @@ def handle_middle(points: np.ndarray, front: FrontFrame) -> np.ndarray | None:
     bar's middle, a knob's centre); None with fewer than :data:`MIN_HANDLE_PIXELS`.
 
     A view's grasp point is its pixel of highest pull affordance, which on a bar may
-    lie anywhere along it: OpenDoor episode 10206's models grasped a 16 cm vertical bar
-    5.6 cm below its middle, 1.4 cm above its lower post; once the door stood ajar no
-    base reached that grasp in any model, where the oracle, grasping the middle, opened
-    it. The fused grasp point is moved to this middle (:func:`_summarise`), and the
-    affordance grasps are drawn near it (:mod:`perception.affordance`)."""
+    lie anywhere along it (OpenDoor episode 10206's models grasped a 16 cm upright bar
+    5.6 cm below its middle, 1.4 cm above its lower post). On the episodes 10130-10159
+    the target's grasp point, weighted over the models, stood from the true middle along
+    the bar by a median 1.8 cm on a door (10 of 30 over 3 cm) and 2.2 cm on a drawer
+    (11 of 30); from this middle, 0.4 cm and 0.4 cm (none over 3 cm). The fused grasp
+    point is moved to this middle (:func:`_summarise`), and the affordance grasps are
+    drawn near it (:mod:`perception.affordance`)."""
     if len(points) < MIN_HANDLE_PIXELS:
         return None
     return np.median(front.to_front(points)[:, 1:], axis=0)
