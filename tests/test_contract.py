@@ -75,8 +75,11 @@ def test_time_budget_stops_the_search() -> None:
     pomdp = make_domain("lightdark1d")
     rng = np.random.default_rng(0)
     belief = pomdp.initial_belief(rng, 100)
+    # Without a simulation cap the budget alone ends the search. The bounds leave room
+    # for a loaded machine (make test beside two evaluations), where a 0.05 s budget and
+    # a 0.5 s bound failed now and then.
     for solver in ("pomcp", "pomcpow"):
-        planner = make_solver(solver, {"sims": None, "time_limit": 0.05}).planner(pomdp)
+        planner = make_solver(solver, {"sims": None, "time_limit": 0.2}).planner(pomdp)
         _, info = planner.act(belief, rng)
-        assert 0.05 <= info.seconds < 0.5
+        assert 0.2 <= info.seconds < 2.0
         assert info.sims > 10
