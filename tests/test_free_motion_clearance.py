@@ -47,7 +47,7 @@ def rounds_tried(succeeds_in: str, wide: bool) -> list[tuple[str, str, int]]:
         finally:
             now[0] = "plain"
 
-    def run(i: int, planner: str, checks: int) -> MotionPlan:
+    def run(i: int, planner: str, checks: int, in_wide: bool) -> MotionPlan:
         tried.append((now[0], planner, checks))
         return plan(now[0] == succeeds_in)
 

@@ -288,7 +288,7 @@ def plan_stow(
         start = prefix[-1] if len(prefix) else q_end
 
         def run(
-            i: int, planner: ArmMotionPlanner, checks: int, start: np.ndarray = start
+            i: int, planner: ArmMotionPlanner, checks: int, _wide: bool, start: np.ndarray = start
         ) -> MotionPlan:
             return _plan(planner, start, goal, validity, checks, params.plan_wall_cap, seed)
 
@@ -304,13 +304,14 @@ def plan_stow(
 
 def clear_first(
     planners: Sequence[ArmMotionPlanner],
-    run: Callable[[int, ArmMotionPlanner, int], MotionPlan],
+    run: Callable[[int, ArmMotionPlanner, int, bool], MotionPlan],
     clear: Callable[[bool], contextlib.AbstractContextManager[None]],
     params: SkillParams,
     wide: Callable[[], contextlib.AbstractContextManager[None]] | None = None,
 ) -> MotionPlan:
-    """The first plan found by ``run(i, planner, checks)`` (the ``i``-th of
-    ``planners``, its budget ``checks`` validity checks): each planner in turn inside
+    """The first plan found by ``run(i, planner, checks, wide)`` (the ``i``-th of
+    ``planners``, its budget ``checks`` validity checks, ``wide`` True in the wide
+    round): each planner in turn inside
     ``wide()`` if given (a wider berth, :func:`keeping_clear` with ``wide_clearance``),
     then inside ``clear(True)`` (e.g. :func:`keeping_clear`, keeping the room the ends
     leave), then inside ``clear(False)`` (what is near the ends may touch), each
@@ -318,19 +319,19 @@ def clear_first(
     check and its full budget; a planner's turn ends the round when it succeeds or
     fails for another reason than its budget."""
     res = None
-    rounds: tuple[tuple[Callable[[], contextlib.AbstractContextManager[None]], int | None], ...]
-    rounds = (
-        (functools.partial(clear, True), params.clear_checks),
-        (functools.partial(clear, False), params.clear_checks),
-        (contextlib.nullcontext, None),
+    Round = tuple[Callable[[], contextlib.AbstractContextManager[None]], int | None, bool]
+    rounds: tuple[Round, ...] = (
+        (functools.partial(clear, True), params.clear_checks, False),
+        (functools.partial(clear, False), params.clear_checks, False),
+        (contextlib.nullcontext, None, False),
     )
     if wide is not None:
-        rounds = ((wide, params.clear_checks), *rounds)
-    for keep, cap in rounds:
+        rounds = ((wide, params.clear_checks, True), *rounds)
+    for keep, cap, is_wide in rounds:
         with keep():
             for i, planner in enumerate(planners):
                 checks = params.planner_checks(i, len(planners))
-                res = run(i, planner, checks if cap is None else min(checks, cap))
+                res = run(i, planner, checks if cap is None else min(checks, cap), is_wide)
                 if res.success or res.reason != NO_PLAN:
                     break
         if res is not None and res.success:

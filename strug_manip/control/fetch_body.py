@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import contextlib
 import time
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import mujoco
@@ -266,29 +266,20 @@ class FullRobot(Recovery):
         q_from = q_from if lead is None else lead
         held = self.params.held_clearance if carrying is not None else 0.0
 
-        def run(i: int, planner: ArmMotionPlanner, checks: int) -> MotionPlan:
-            if wide_round[0]:  # its own seeds: see WIDE_SEED
-                return self._arm_plan(planner, q_from, q_to, validity, checks, WIDE_SEED)
-            return self._arm_plan(planner, q_from, q_to, validity, checks)
+        def run(i: int, planner: ArmMotionPlanner, checks: int, in_wide: bool) -> MotionPlan:
+            offset = WIDE_SEED if in_wide else 0  # the wide round's own seeds: WIDE_SEED
+            return self._arm_plan(planner, q_from, q_to, validity, checks, offset)
 
         def clear(room: bool) -> contextlib.AbstractContextManager[None]:
             ends = (q_from, q_to)
             return keeping_clear(checker, validity.base, ends, self.params, held, room)
 
-        wide_round = [False]
-
-        @contextlib.contextmanager
-        def wide() -> Iterator[None]:
+        def wide() -> contextlib.AbstractContextManager[None]:
             w = self.params.wide_clearance
             ends = (q_from, q_to)
-            wide_round[0] = True
-            try:
-                with keeping_clear(
-                    checker, validity.base, ends, self.params, w if carrying else 0.0, True, w
-                ):
-                    yield
-            finally:
-                wide_round[0] = False
+            return keeping_clear(
+                checker, validity.base, ends, self.params, w if carrying else 0.0, True, w
+            )
 
         plan = clear_first(planners, run, clear, self.params, wide)
         self.plan_seconds += time.perf_counter() - t
