@@ -23,6 +23,7 @@ from strug_manip.domains.manipulation.conditioning import (
     SAME_HINGE,
     Front,
     condition,
+    ended_limits,
     longest_limit,
     passed_limits,
     seen_positions,
@@ -404,6 +405,51 @@ def test_a_part_the_real_front_passed_the_limit_of_gets_the_limit_the_front_show
             w.twins[i].restore(s.sim)
             assert position(w.twins[i].world, p.joint) == pytest.approx(wide.upper, abs=1e-6)
     assert longest_limit(p) == pytest.approx(p.interior_size[0])
+
+
+def test_a_drawer_whose_real_opening_met_its_end_gets_its_limit_where_the_front_stopped(
+    shut_episode,
+):
+    """A real opening that met its part's end short of a particle's drawer limit moves
+    that limit to where the front stands (the particle keeps its weight, its twin is
+    rebuilt, its drawer stands at the new limit); a front that met no end, a front
+    standing shut, and a door are left alone."""
+    d, s0, belief = shut_episode
+    w, rw = d.worlds, d.real.world
+    rw.restore(s0.sim)
+    kinds = {}
+    for k, part in enumerate(d.parts):
+        for s in belief.states:
+            link = part.links[s.origin]
+            if link is not None:
+                kind = w.particles[s.origin].spec.part(link).joint_type
+                kinds.setdefault(kind, (k, s.origin, link))
+    k, i, link = kinds["prismatic"]
+    spec = w.particles[i].spec
+    p = spec.part(link)
+    half = 0.5 * p.upper
+    assert ended_limits({link: half}, spec, {link}) == {link: pytest.approx(half)}
+    assert ended_limits({link: half}, spec, set()) == {}
+    assert ended_limits({link: 0.005}, spec, {link}) == {}
+    assert ended_limits({link: p.upper}, spec, {link}) == {}
+    if "revolute" in kinds:
+        _, j, door = kinds["revolute"]
+        dspec = w.particles[j].spec
+        assert ended_limits({door: 0.3 * dspec.part(door).upper}, dspec, {door}) == {}
+    R = (rw.cabinet_pose() @ np.linalg.inv(rw.scene.T_world_cabinet) @ w.pose(i))[:3, :3]
+    fronts = {k: Front(R @ (half * np.asarray(p.axis)))}
+    twin = w.twins[i]
+    conditioned = condition(belief, rw, w, d.parts, [], fronts, ended=[k])
+    assert w.twins[i] is not twin
+    np.testing.assert_array_equal(conditioned.weights, belief.weights)
+    assert w.particles[i].spec.part(link).upper == pytest.approx(half, abs=1e-6)
+    m = w.twins[i].world.model
+    rng_ = m.jnt_range[m.joint(w.twins[i].world.scene.cabinet_prefix + p.joint).id]
+    assert rng_[1] == pytest.approx(half, abs=1e-6)
+    for s in conditioned.states:
+        if s.origin == i:
+            w.twins[i].restore(s.sim)
+            assert position(w.twins[i].world, p.joint) == pytest.approx(half, abs=1e-6)
 
 
 def test_a_turn_about_a_hinge_is_read_back_from_the_handles_offset():

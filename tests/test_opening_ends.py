@@ -65,6 +65,7 @@ def test_an_opening_ends_where_its_part_stops_in_both_bodies(ctx, seed, kinds, l
     where = out.summary()
     assert out.status is Status.OK and "met its end" in out.detail, where
     assert out.phase in ("move", "ease") and not out.holding, where
+    assert out.met_end, where
     assert out.part_positions[joint] == pytest.approx(upper, abs=0.02 * max(upper, 1.0)), where
     assert out.cabinet_motion < p.cabinet_motion_limit, where
     # The twin of the real cabinet predicts the same.
@@ -81,6 +82,7 @@ def test_an_opening_ends_where_its_part_stops_in_both_bodies(ctx, seed, kinds, l
     off = skill.run(real, ctx=ctx, params=dataclasses.replace(p, end_share=2.0),
                     plan_world=believed)  # fmt: skip
     assert off.status is Status.CABINET_MOVED, off.summary()
+    assert not off.met_end
 
 
 def test_the_part_end_rule_is_a_strain_along_the_path_after_an_unstrained_first_part() -> None:

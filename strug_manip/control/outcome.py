@@ -121,6 +121,13 @@ class Outcome:
         return self.status is Status.OK
 
     @property
+    def met_end(self) -> bool:
+        """It ended ``ok`` because an opening's part met its end before the path's end
+        (:func:`~.executor.at_part_end`; ``phase`` names the line it stopped in): the
+        part stands at a limit no view shows."""
+        return self.status is Status.OK and self.phase != ""
+
+    @property
     def on_the_way(self) -> bool:
         """It stopped after the robot moved but before the hand reached the part: the
         arm, or what it carries, met something in the drive or the reach

@@ -10,7 +10,8 @@ tracked as well), which parts stand shut (a front flush with the carcass) and wh
 the open ones' handles are (each particle's part is moved there along its own joint,
 a drawer along its axis, a door about its hinge: which way a part opens the camera
 does not show, where its front stands it does; a particle whose limit the real front
-has passed gets that limit moved to the front, as no view shows a part's limit).
+has passed gets that limit moved to the front, as no view shows a part's limit, and so
+does a particle's drawer whose real opening met its end short of that limit).
 Each particle keeps its other parts' joints and, when the real hand holds the object,
 its own idea of the grasp; a particle whose hand is empty while the real one holds the
 object (its twin's Place went through where the real one stopped) gets the object back
@@ -23,7 +24,7 @@ particle, and every later Place aims into it.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -75,13 +76,17 @@ def condition(
     parts: Sequence[CataloguePart],
     shut: Sequence[int],
     fronts: Mapping[int, Front] | None = None,
+    ended: Collection[int] = (),
 ) -> ParticleBelief:
     """``belief`` given what the real world ``real`` shows for certain (module
     docstring); ``shut``: the catalogued parts whose real part stands shut
     (:func:`is_shut`); ``fronts``: the real fronts of the catalogued parts that stand
-    open (:func:`as_seen`). A particle whose part a real front has passed the limit of
-    gets the limit the front showed first (:func:`passed_limits`,
-    :meth:`.ParticleWorlds.widen`): its twin is rebuilt."""
+    open (:func:`as_seen`); ``ended``: the catalogued parts whose real opening in the
+    last step met its part's end (:attr:`.Outcome.met_end`). A particle whose part a
+    real front has passed the limit of gets the limit the front showed first
+    (:func:`passed_limits`), and one whose drawer's real opening ended short of its
+    limit gets the limit where the front stopped (:func:`ended_limits`,
+    :meth:`.ParticleWorlds.set_uppers`): its twin is rebuilt."""
     fronts = {} if fronts is None else fronts
     base = np.array([real.robot_qpos()[j] for j in BASE_JOINTS])
     moved = real.cabinet_pose() @ np.linalg.inv(real.scene.T_world_cabinet)
@@ -93,9 +98,10 @@ def condition(
     for i in sorted({s.origin for s in belief.states}):
         spec = w.particles[i].spec
         seen[i] = seen_positions(parts, i, fronts, spec, (moved @ w.pose(i))[:3, :3])
-        wider = passed_limits(seen[i], spec)
-        if wider:
-            w.widen(i, wider)
+        ends = {link for k in ended if (link := parts[k].links[i]) is not None}
+        uppers = passed_limits(seen[i], spec) | ended_limits(seen[i], spec, ends)
+        if uppers:
+            w.set_uppers(i, uppers)
 
     def edit(tw: PlanningTwin, s: ManipState) -> None:
         tw.world.set_cabinet_pose(moved @ tw.world.scene.T_world_cabinet)
@@ -211,6 +217,39 @@ def passed_limits(seen: Mapping[str, float], spec: CabinetSpec) -> dict[str, flo
         p = spec.part(link)
         if v > p.upper + PASSED[p.joint_type]:
             out[link] = min(v, max(longest_limit(p), p.upper))
+    return out
+
+
+def ended_limits(
+    seen: Mapping[str, float], spec: CabinetSpec, ended: Collection[str]
+) -> dict[str, float]:
+    """The limits a particle's drawers (of its cabinet ``spec``) get where a real
+    opening met its part's end (``ended``: their links) and the real front stands
+    (``seen``, by link: :func:`seen_positions`) more than :data:`PASSED` short of the
+    drawer's upper limit, open (beyond :data:`SHUT`), by link [m]: the front's position,
+    as far as an opening takes that drawer.
+
+    The counterpart of :func:`passed_limits`. A real opening goes on past the likeliest
+    model's limit (:func:`~.grounding.longest_travel`) until its part stops following
+    the hand; where the drawer stands after it is as far as the robot's opening leaves
+    it. A particle that kept its longer limit believed a second opening would take the
+    drawer further, and the search opened it again. In OpenDrawer episode 10231 the
+    first opening met the drawer's end at 0.182 m, and the drawer slid back to 0.137 m
+    as the hand let go (the pull had rocked the cabinet); the second pulled it to its
+    end again, tipped the cabinet 6 degrees, drew out a drawer of the other column, and
+    the next opening dragged the cabinet. Over the OpenDrawer runs on 10190:10250, of 9
+    openings of a drawer an earlier opening had left ``ok``, 6 moved the cabinet and 3
+    left the drawer where it stood. Only drawers: a door's opening that stops along its arc
+    may have met a hinge a little off, not the door's limit, and a door's limit capped
+    short of the real one would leave the right hinge no way to open it further."""
+    out = {}
+    for link in ended:
+        p = spec.part(link)
+        v = seen.get(link)
+        if p.joint_type != "prismatic" or v is None or v <= SHUT["prismatic"]:
+            continue
+        if v < p.upper - PASSED["prismatic"]:
+            out[link] = max(v, p.lower)
     return out
 
 

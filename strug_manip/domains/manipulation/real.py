@@ -121,6 +121,8 @@ class RealEpisode:
         now: the step count of the states after the last real step (the root's).
         still: the last real step stopped before anything moved
             (:data:`~.rules.BEFORE_MOTION`).
+        ended: the catalogued part whose real opening the last step ended where the
+            part met its end (:attr:`.Outcome.met_end`), else None.
         handles: the true cabinet's graspable parts' handles where they were when the
             episode began, world (3,) [m], by link: what tells which real part an
             opening or a probe acts on (:meth:`RealEnvironment.real_link`).
@@ -138,6 +140,7 @@ class RealEpisode:
     unplanned: collections.Counter = field(default_factory=collections.Counter)
     now: int = 0
     still: bool = False
+    ended: int | None = None
     handles: dict[str, np.ndarray] = field(default_factory=dict)
 
     @property
@@ -263,7 +266,8 @@ class RealEnvironment:
         if real.still:
             belief = conditioning.unmoved(belief, self.belief)
         shut, out = self.fronts()
-        self.belief = conditioning.condition(belief, real.world, w, model.parts, shut, out)
+        ended = [real.ended] if real.ended in out else []
+        self.belief = conditioning.condition(belief, real.world, w, model.parts, shut, out, ended)
         if self.oracle:
             self.belief = take_over(self.belief, real.world, w)
         if self.health is not None:
@@ -316,6 +320,7 @@ class RealEnvironment:
         real.settle((a, model.root.rep(a)), status)
         real.now = s.t + 1
         real.still = status in BEFORE_MOTION
+        real.ended = a.part if out is not None and out.met_end else None
         model.root = replace(model.root, refused=frozenset(real.refused), now=real.now)
         frame = take_views(world, 1)[0]
         real.frames.append(frame)

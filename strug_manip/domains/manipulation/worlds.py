@@ -110,19 +110,18 @@ class ParticleWorlds:
         w.copy_joints(tw.world, [*w.part_joints, w.scene.cabinet_prefix + "free"])
         return w
 
-    def widen(self, i: int, uppers: Mapping[str, float]) -> None:
+    def set_uppers(self, i: int, uppers: Mapping[str, float]) -> None:
         """Particle ``i``'s cabinet with the upper limits of the parts ``uppers`` names
-        (link -> limit [m or rad]) raised to those values (never lowered): its
-        particle, its twin and its Fetch world rebuilt from the new description. Its
-        states stay valid (a limit changes no state's layout), and so do its predicted
-        clouds (a limit does not show). The cached outcomes, start checks and action
-        relevances are dropped, every particle's and not only ``i``'s (simulated under
-        the old limits): a particle's limit moves at most once per part a real front
-        passes, and a search refills them."""
+        (link -> limit [m or rad]) set to those values: its particle, its twin and its
+        Fetch world rebuilt from the new description. Its states stay valid (a limit
+        changes no state's layout), and so do its predicted clouds (a limit does not
+        show). The cached outcomes, start checks and action relevances are dropped,
+        every particle's and not only ``i``'s (simulated under the old limits): a
+        particle's limit moves only when a real front passes it or a real opening meets
+        its end (:mod:`.conditioning`), and a search refills them."""
         p = self.particles[i]
         parts = tuple(
-            replace(q, upper=max(q.upper, float(uppers[q.link]))) if q.link in uppers else q
-            for q in p.spec.parts
+            replace(q, upper=float(uppers[q.link])) if q.link in uppers else q for q in p.spec.parts
         )
         spec = replace(p.spec, parts=parts)
         self.particles[i] = replace(p, spec=spec)
