@@ -266,7 +266,8 @@ class RealEnvironment:
         if real.still:
             belief = conditioning.unmoved(belief, self.belief)
         shut, out = self.fronts()
-        ended = [real.ended] if real.ended in out else []
+        # The oracle's particle is the real cabinet: its limits are the real ones.
+        ended = [real.ended] if real.ended in out and not self.oracle else []
         self.belief = conditioning.condition(belief, real.world, w, model.parts, shut, out, ended)
         if self.oracle:
             self.belief = take_over(self.belief, real.world, w)
