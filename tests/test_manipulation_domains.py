@@ -391,7 +391,8 @@ def test_a_part_the_real_front_passed_the_limit_of_gets_the_limit_the_front_show
     assert len(w.outcomes) > 0
     twin = w.twins[i]
     conditioned = condition(belief, rw, w, d.parts, [], fronts)
-    assert w.twins[i] is not twin and len(w.outcomes) == 0
+    assert w.twins[i] is not twin
+    assert not any(key[0] == i or key[2].part == k for key in w.outcomes)
     np.testing.assert_array_equal(conditioned.weights, belief.weights)
     wide = w.particles[i].spec.part(link)
     assert wide.upper == pytest.approx(min(far, longest_limit(p)))
@@ -450,6 +451,35 @@ def test_a_drawer_whose_real_opening_met_its_end_gets_its_limit_where_the_front_
         if s.origin == i:
             w.twins[i].restore(s.sim)
             assert position(w.twins[i].world, p.joint) == pytest.approx(half, abs=1e-6)
+
+
+def test_a_new_limit_drops_what_was_simulated_under_the_old_one_and_keeps_the_rest(
+    shut_episode,
+):
+    """:meth:`.ParticleWorlds.set_uppers` drops the particle's own cached outcomes,
+    start checks and relevances, and every particle's outcomes and start checks of
+    actions on the part whose limit moved (an opening's travel is the longest any
+    particle holds); every other entry stays."""
+    d, _, _ = shut_episode
+    w = d.worlds
+    i, j, k, other = 0, 1, 0, 1
+    link = next(c.links[i] for c in d.parts[k:] if c.links[i] is not None)
+    k = next(n for n, c in enumerate(d.parts) if c.links[i] == link)
+    other = next(n for n in range(len(d.parts)) if n != k)
+    opening = {n: ManipAction("OpenDrawer", n, 0) for n in (k, other)}
+    pick = ManipAction("Pick", grasp="top")
+    for cache in (w.outcomes, w.can_start):
+        for key in [(i, b"s", pick, ()), (j, b"s", pick, ()), (j, b"s", opening[k], ()),
+                    (j, b"s", opening[other], ())]:  # fmt: skip
+            cache.store(key, "simulated")
+    for key in [(i, b"s"), (j, b"s")]:
+        w.relevance.store(key, "relevance")
+    upper = w.particles[i].spec.part(link).upper
+    w.set_uppers(i, {link: upper}, [k])
+    for cache in (w.outcomes, w.can_start):
+        assert (j, b"s", pick, ()) in cache and (j, b"s", opening[other], ()) in cache
+        assert (i, b"s", pick, ()) not in cache and (j, b"s", opening[k], ()) not in cache
+    assert (j, b"s") in w.relevance and (i, b"s") not in w.relevance
 
 
 def test_a_turn_about_a_hinge_is_read_back_from_the_handles_offset():

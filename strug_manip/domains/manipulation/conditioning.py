@@ -101,7 +101,7 @@ def condition(
         ends = {link for k in ended if (link := parts[k].links[i]) is not None}
         uppers = passed_limits(seen[i], spec) | ended_limits(seen[i], spec, ends)
         if uppers:
-            w.set_uppers(i, uppers)
+            w.set_uppers(i, uppers, [k for k, c in enumerate(parts) if c.links[i] in uppers])
 
     def edit(tw: PlanningTwin, s: ManipState) -> None:
         tw.world.set_cabinet_pose(moved @ tw.world.scene.T_world_cabinet)

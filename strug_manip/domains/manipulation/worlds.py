@@ -20,7 +20,7 @@ Caches (bounded, least recently used dropped first):
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -110,28 +110,36 @@ class ParticleWorlds:
         w.copy_joints(tw.world, [*w.part_joints, w.scene.cabinet_prefix + "free"])
         return w
 
-    def set_uppers(self, i: int, uppers: Mapping[str, float]) -> None:
+    def set_uppers(self, i: int, uppers: Mapping[str, float], parts: Collection[int]) -> None:
         """Particle ``i``'s cabinet with the upper limits of the parts ``uppers`` names
         (link -> limit [m or rad]) set to those values: its particle, its twin and its
         Fetch world rebuilt from the new description. Its states stay valid (a limit
         changes no state's layout), and so do its predicted clouds (a limit does not
-        show). The cached outcomes, start checks and action relevances are dropped,
-        every particle's and not only ``i``'s (simulated under the old limits): a
-        particle's limit moves only when a real front passes it or a real opening meets
-        its end (:mod:`.conditioning`), and a search refills them."""
+        show). A particle's limit moves only when a real front passes it or a real
+        opening meets its end (:mod:`.conditioning`).
+
+        Dropped from the caches, as simulated under the old limits: particle ``i``'s
+        outcomes, start checks and action relevances, and every particle's outcomes and
+        start checks of actions on the catalogued ``parts`` (those ``uppers`` names in
+        ``i``): an opening goes on toward the longest limit any particle holds for its
+        part (:func:`~.grounding.longest_travel`). The rest stay valid, and the next
+        search reuses them."""
         p = self.particles[i]
-        parts = tuple(
+        described = tuple(
             replace(q, upper=float(uppers[q.link])) if q.link in uppers else q for q in p.spec.parts
         )
-        spec = replace(p.spec, parts=parts)
+        spec = replace(p.spec, parts=described)
         self.particles[i] = replace(p, spec=spec)
         old, self.twins[i] = self.twins[i], PlanningTwin(spec, self.config, self.ctx)
         old.world.close()
         fetch = self._fetch.pop(i, None)
         if fetch is not None:
             fetch.close()
-        for cache in (self.outcomes, self.can_start, self.relevance):
-            cache.clear()
+        for cache in (self.outcomes, self.can_start):  # keyed (particle, state, action, ...)
+            for key in [k for k in cache if k[0] == i or k[2].part in parts]:
+                del cache[key]
+        for key in [k for k in self.relevance if k[0] == i]:  # keyed (particle, state)
+            del self.relevance[key]
 
     def predicted_cloud(self, i: int, state: WorldState, pose: LookPose) -> np.ndarray:
         """The head camera's cabinet cloud (N, 3) [m] particle ``i`` predicts in
