@@ -235,13 +235,14 @@ def ended_limits(
     it. A particle that kept its longer limit believed a second opening would take the
     drawer further, and the search opened it again. In OpenDrawer episode 10231 the
     first opening met the drawer's end at 0.182 m, and the drawer slid back to 0.137 m
-    as the hand let go (the pull had rocked the cabinet); the second pulled it to its
-    end again, tipped the cabinet 6 degrees, drew out a drawer of the other column, and
-    the next opening dragged the cabinet. Over the OpenDrawer runs on 10190:10250, of 9
-    openings of a drawer an earlier opening had left ``ok``, 6 moved the cabinet and 3
-    left the drawer where it stood. Only drawers: a door's opening that stops along its arc
-    may have met a hinge a little off, not the door's limit, and a door's limit capped
-    short of the real one would leave the right hinge no way to open it further."""
+    after the hand stopped (the cabinet had lifted 3 mm at the stop); the second pulled
+    it to its end again, tipped the cabinet 6 degrees, drew out a drawer of the other
+    column, and the next opening dragged the cabinet. Over the OpenDrawer runs on
+    10190:10250, of 9 openings of a drawer an earlier opening had left ``ok``, 6 moved
+    the cabinet and 3 left the drawer where it stood. Only drawers: a door's opening
+    that stops along its arc may have met a hinge a little off, not the door's limit,
+    and a door's limit capped short of the real one would leave the right hinge no way
+    to open it further."""
     out = {}
     for link in ended:
         p = spec.part(link)
