@@ -462,9 +462,9 @@ def test_a_new_limit_drops_what_was_simulated_under_the_old_one_and_keeps_the_re
     particle holds); every other entry stays."""
     d, _, _ = shut_episode
     w = d.worlds
-    i, j, k, other = 0, 1, 0, 1
-    link = next(c.links[i] for c in d.parts[k:] if c.links[i] is not None)
-    k = next(n for n, c in enumerate(d.parts) if c.links[i] == link)
+    i, j = 0, 1
+    k = next(n for n, c in enumerate(d.parts) if c.links[i] is not None)
+    link = d.parts[k].links[i]
     other = next(n for n in range(len(d.parts)) if n != k)
     opening = {n: ManipAction("OpenDrawer", n, 0) for n in (k, other)}
     pick = ManipAction("Pick", grasp="top")
