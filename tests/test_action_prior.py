@@ -145,10 +145,12 @@ def test_strug_puts_its_root_visits_where_its_particles_plans_begin() -> None:
     """With an action prior, STRUG's root is PUCT over the weight of the plans' first
     actions (``root_selection="auto"``): on a certain Tiger belief (tiger left), every
     plan opens the right door, which then gets most of the visits and is the decision;
-    the same search by UCB tries all three actions first."""
+    the same search by UCB tries all three actions first. (The whole budget runs:
+    ``stop_decided`` would end it once the door's lead is settled.)"""
     sure = ParticleBelief.from_states([0] * 20)
     rng = np.random.default_rng(0)
-    _, info = STRUGConfig(sims=9).planner(DoorsFirstTiger()).act(sure, rng)
+    whole = STRUGConfig(sims=9, stop_decided=False)
+    _, info = whole.planner(DoorsFirstTiger()).act(sure, rng)
     visits = dict(zip(info.actions, info.visits.tolist(), strict=True))
     assert max(visits, key=visits.__getitem__) == OPEN_RIGHT and visits[OPEN_RIGHT] >= 7
     ucb = STRUGConfig(sims=9, root_selection="ucb").planner(DoorsFirstTiger())
@@ -169,3 +171,48 @@ def test_puct_scores_and_decides_by_visits() -> None:
     assert puct_select([0, 1, 2], q, n, 5, 100.0, [0.1, 0.8, 0.1]) == 1
     assert most_visited_index(np.array([1.0, 3.0, 2.0]), np.array([4, 4, 1])) == 1
     assert most_visited_index(np.array([1.0]), np.array([0])) is None
+
+
+@pytest.mark.parametrize(
+    ("states", "settles"),
+    [([0] * 20, True), ([0] * 15 + [1] * 5, True), ([0, 1] * 10, False)],
+)
+def test_a_puct_search_stops_once_its_decision_is_settled_and_decides_as_the_whole_budget(
+    states: list[int], settles: bool
+) -> None:
+    """``stop_decided`` ends a PUCT root's search when the most visited action leads
+    every other by more than the simulations left: the decision is the whole budget's,
+    in fewer simulations. A 50/50 tiger never settles: both doors keep even visits,
+    and the whole budget runs."""
+    belief = ParticleBelief.from_states(states)
+    runs = {}
+    for stop in (True, False):
+        rng = np.random.default_rng(3)
+        cfg = STRUGConfig(sims=60, stop_decided=stop)
+        action, info = cfg.planner(DoorsFirstTiger()).act(belief, rng)
+        runs[stop] = (action, info)
+    (a_stop, i_stop), (a_all, i_all) = runs[True], runs[False]
+    assert a_stop == a_all and i_all.sims == 60
+    if not settles:
+        assert i_stop.sims == 60 and np.array_equal(i_stop.visits, i_all.visits)
+        return
+    assert i_stop.sims < 60
+    lead, *rest = sorted(i_stop.visits.tolist(), reverse=True)
+    assert lead - max(rest) > 60 - i_stop.sims
+
+
+def test_a_search_that_decides_by_value_or_by_time_runs_its_whole_budget() -> None:
+    """A UCB root decides by value, which any simulation may change, and a time budget
+    leaves the simulations left unknown: neither stops early."""
+    sure = ParticleBelief.from_states([0] * 20)
+    for cfg, pomdp in (
+        (STRUGConfig(sims=40), Tiger()),  # no prior: UCB (Table I's search)
+        (STRUGConfig(sims=40, root_selection="ucb"), DoorsFirstTiger()),
+    ):
+        _, info = cfg.planner(pomdp).act(sure, np.random.default_rng(0))
+        assert info.sims == 40
+    timed = STRUGConfig(sims=None, time_limit=0.2).planner(DoorsFirstTiger())
+    _, info = timed.act(sure, np.random.default_rng(0))
+    assert info.sims > 40  # a sure belief's door would have settled within 40
+    with pytest.raises(ConfigError, match="stop_decided must be true or false"):
+        STRUGConfig(stop_decided="yes")  # type: ignore[arg-type]

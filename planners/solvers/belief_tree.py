@@ -129,6 +129,13 @@ class BeliefTreeConfig(TreeSearchConfig):
             spread evenly; the decision is the most visited action); ``"auto"``
             (default): ``"puct"`` where the domain has an action prior and the solver
             has its particles' plans (STRUG on the manipulation tasks), else ``"ucb"``.
+        stop_decided: a PUCT root's search under a simulation budget (no
+            ``time_limit``) stops once its decision is settled: the most visited root
+            action leads every other by more than the simulations left, so none of
+            them could change the decision (visit-count pruning, as in Leela Chess
+            Zero's "smart pruning"). The decision is the one the whole budget gives;
+            ``sims`` reports the simulations run. Default True; a UCB root, whose
+            decision is by value, always runs its whole budget.
     """
 
     particles: int = 32
@@ -141,6 +148,7 @@ class BeliefTreeConfig(TreeSearchConfig):
     rollout: str = "random"
     solve_terminal: str = "auto"
     root_selection: str = "auto"
+    stop_decided: bool = True
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -155,6 +163,8 @@ class BeliefTreeConfig(TreeSearchConfig):
                 f"solve_terminal must be one of {', '.join(SOLVE_TERMINAL)}, "
                 f"got {self.solve_terminal!r}"
             )
+        if not isinstance(self.stop_decided, bool):
+            raise ConfigError(f"stop_decided must be true or false, got {self.stop_decided!r}")
         check_rollout(self.rollout, ROLLOUTS)
         check_positive_float("beta", self.beta, allow_zero=True)
         check_widening(self.widening, self.k_action, self.alpha_action)
@@ -484,6 +494,13 @@ class BeliefTreeSearch:
         tree.update(anode, snode, total)
         return total
 
+    def settled(self, left: int) -> bool:
+        """Whether ``left`` more simulations cannot change a PUCT root's decision (the
+        most visited action): its visits exceed every other action's by more than
+        ``left``, so no other can reach them."""
+        visits = sorted((self.tree.a_n[j] for j in self.tree.b_children[0]), reverse=True)
+        return len(visits) > 0 and visits[0] - (visits[1] if len(visits) > 1 else 0) > left
+
     def decision(self) -> Hashable | None:
         """The root's action: after a PUCT search the most visited, else the visited
         one of the highest value (None if nothing was visited)."""
@@ -497,7 +514,10 @@ class BeliefTreeSearch:
         w0 = np.asarray(root_weights, dtype=float)
         self.add_node(list(root_states), w0 / w0.sum(), [True] * len(w0), 0.0, -1)
         sims = 0
-        while not budget.done(sims):
+        cfg = self.config
+        # The stop needs the simulations left, known only under a simulation budget.
+        stop = self.puct and cfg.stop_decided and cfg.time_limit is None and cfg.sims is not None
+        while not budget.done(sims) and not (stop and self.settled(cfg.sims - sims)):
             self.simulate(0, 0)
             sims += 1
         tree = self.tree
