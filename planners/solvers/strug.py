@@ -8,7 +8,8 @@ TRU computed from the cached matrix and each node's weights over the M particles
 On a domain with an action prior, the root's actions are ordered by the weight of the
 particles whose plan begins with them, then by the domain's prior (``root_plans`` of
 :class:`~planners.solvers.belief_tree.BeliefTreeSearch`), and the root chooses among them
-by PUCT over that weight (``root_selection``).
+by PUCT over that weight (``root_selection``), stopping once no simulation left could
+change its decision (``stop_decided``).
 """
 
 from __future__ import annotations
@@ -53,6 +54,8 @@ class STRUGConfig(BeliefTreeConfig):
             ``plan_for``, else ``"random"``), ``"plan"`` (a particle's uncertainty-free
             plan executed from another particle, both drawn from the node's belief) or
             ``"random"`` (the paper's Algorithm 2 as written).
+        stop_decided: a PUCT root (the manipulation tasks) stops once no simulation
+            left could change its decision (:class:`BeliefTreeConfig`; default True).
     """
 
     name: ClassVar[str] = "strug"
