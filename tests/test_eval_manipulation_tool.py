@@ -41,7 +41,7 @@ def test_the_report_counts_successes_causes_and_time(tmp_path: Path, capsys) -> 
     assert E.main(["--domains", "shelf", "--solvers", "strug", "--seeds", "100:103",
                    "--out", str(tmp_path), "--report-only"]) == 0  # fmt: skip
     out = capsys.readouterr().out
-    assert "| shelf | strug | 1/3 (33%) |" in out  # seed 7 is outside the range
+    assert "| shelf | strug | 1/3 (33%) | 2.00 | 161.0 | 20.0 |" in out  # seed 7 is not in
     assert "failures by cause (2 of 3 episodes)" in out
     assert "1  dragged (strug 1)" in out and "1  nothing ran (strug 1)" in out
     assert "twin 60%, render 20%, likelihood 0%, real 20%" in out

@@ -216,21 +216,24 @@ def run_bench(
 
 
 def success_table(records: list[dict[str, Any]]) -> str:
-    """Markdown: per domain and solver, the episodes that earned the task's +10, and
-    the median planning time per step and episode wall time [s] (the records that have
-    ``success``: the manipulation tasks)."""
+    """Markdown: per domain and solver, the episodes that earned the task's +10, the
+    median planning time per step and episode wall time [s], and the mean simulations
+    run per decision (a search that stops once its decision is settled runs fewer than
+    its budget: ``stop_decided``) (the records that have ``success``: the manipulation
+    tasks)."""
     groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
     for r in records:
         if "success" in r:
             groups.setdefault((r["domain"], r["solver"]), []).append(r)
-    lines = ["| domain | solver | success | median plan s/step | median episode s |",
-             "|---|---|---|---|---|"]  # fmt: skip
+    lines = ["| domain | solver | success | median plan s/step | median episode s | "
+             "mean sims/decision |", "|---|---|---|---|---|---|"]  # fmt: skip
     for (d, s), rs in sorted(groups.items()):
         ok = sum(bool(r["success"]) for r in rs)
         plan = statistics.median(r.get("plan_seconds_median", 0.0) for r in rs)
         wall = statistics.median(r["seconds"] for r in rs)
+        sims = statistics.mean(r["mean_sims"] for r in rs)
         rate = f"{ok}/{len(rs)} ({ok / len(rs):.0%})"
-        lines.append(f"| {d} | {s} | {rate} | {plan:.2f} | {wall:.1f} |")
+        lines.append(f"| {d} | {s} | {rate} | {plan:.2f} | {wall:.1f} | {sims:.1f} |")
     return "\n".join(lines) + "\n"
 
 
