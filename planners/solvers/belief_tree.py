@@ -510,11 +510,11 @@ class BeliefTreeSearch:
 
     def run(self, root_states: Sequence[Any], root_weights: np.ndarray) -> TreeResult:
         """Search from the belief ``(root_states, root_weights)`` (weights ``(M,)``)."""
-        budget = Budget(self.config.sims, self.config.time_limit)
+        cfg = self.config
+        budget = Budget(cfg.sims, cfg.time_limit)
         w0 = np.asarray(root_weights, dtype=float)
         self.add_node(list(root_states), w0 / w0.sum(), [True] * len(w0), 0.0, -1)
         sims = 0
-        cfg = self.config
         # The stop needs the simulations left, known only under a simulation budget.
         stop = self.puct and cfg.stop_decided and cfg.time_limit is None and cfg.sims is not None
         while not budget.done(sims) and not (stop and self.settled(cfg.sims - sims)):

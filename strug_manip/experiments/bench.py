@@ -216,11 +216,10 @@ def run_bench(
 
 
 def success_table(records: list[dict[str, Any]]) -> str:
-    """Markdown: per domain and solver, the episodes that earned the task's +10, the
-    median planning time per step and episode wall time [s], and the mean simulations
-    run per decision (a search that stops once its decision is settled runs fewer than
-    its budget: ``stop_decided``) (the records that have ``success``: the manipulation
-    tasks)."""
+    """Markdown, for the records that have ``success`` (the manipulation tasks): per
+    domain and solver, the episodes that earned the task's +10, the median planning
+    time per step and episode wall time [s], and the mean simulations run per decision
+    (fewer than the budget where a search stops once settled, ``stop_decided``)."""
     groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
     for r in records:
         if "success" in r:
